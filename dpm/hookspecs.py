@@ -1,0 +1,64 @@
+"""pluggy hook specifications of dpm (entry-point group ``dpm``).
+
+A plugin package declares in its ``pyproject.toml``::
+
+    [project.entry-points.dpm]
+    my_plugin = "my_package.dpm_plugin"
+
+and implements any of these hooks in that module with ``@dpm.hookimpl``. The built-ins
+of dpm register through exactly this mechanism (``dpm.builtin``).
+
+Registration hooks are called once, when the registry loads. Run-time hooks are called
+per step (only if some plugin implements them: then the step loop returns to Python every
+step) or per event; never per contact.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import pluggy
+
+if TYPE_CHECKING:
+    from .simulation import Simulation
+
+hookspec = pluggy.HookspecMarker("dpm")
+hookimpl = pluggy.HookimplMarker("dpm")
+
+Register = Callable[[str, type], None]
+
+
+@hookspec
+def dpm_register_shapes(register: Register) -> None:
+    """Call ``register(name, cls)`` for each :class:`dpm.Shape` subclass provided."""
+
+
+@hookspec
+def dpm_register_boundaries(register: Register) -> None:
+    """Call ``register(name, cls)`` for each :class:`dpm.Boundary` subclass provided."""
+
+
+@hookspec
+def dpm_register_impact_models(register: Register) -> None:
+    """Call ``register(name, cls)`` for each :class:`dpm.ImpactModel` subclass provided."""
+
+
+@hookspec
+def dpm_register_integrators(register: Register) -> None:
+    """Call ``register(name, cls)`` for each :class:`dpm.Integrator` subclass provided."""
+
+
+@hookspec
+def dpm_before_step(sim: Simulation) -> None:
+    """Called before every step (makes the run return to Python each step)."""
+
+
+@hookspec
+def dpm_after_step(sim: Simulation) -> None:
+    """Called after every step (makes the run return to Python each step)."""
+
+
+@hookspec
+def dpm_on_output(sim: Simulation, frame: int, path: Any) -> None:
+    """Called after each output frame is written and flushed."""

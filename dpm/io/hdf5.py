@@ -1,0 +1,181 @@
+"""HDF5 output of a run; the layout is documented in docs/output-format.md.
+
+Per-particle data of all frames are concatenated along the first axis of extendable,
+chunked datasets under ``/particles``; frame k holds rows ``start[k] : start[k] + count[k]``
+(the particle count may change between frames). The file is written in SWMR mode and
+flushed after every frame; ``/frames/time`` is extended last, so a run killed at any moment
+leaves a readable file whose frames are the ones fully written.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import h5py
+import numpy as np
+
+if TYPE_CHECKING:
+    from ..simulation import Simulation
+
+FORMAT = "dpm-hdf5"
+FORMAT_VERSION = 1
+#: per-particle fields: name -> (width, dtype, Bodies attribute)
+FIELDS = {
+    "id": (0, "i8", "id"),
+    "position": (3, "f8", "position"),
+    "velocity": (3, "f8", "velocity"),
+    "orientation": (4, "f8", "orientation"),
+    "angular_velocity": (3, "f8", "angular_velocity"),
+    "radius": (0, "f8", "radius"),
+    "mass": (0, "f8", "mass"),
+    "material": (0, "i4", "material"),
+}
+XDMF_INTERVAL_S = 5.0
+
+
+class Writer:
+    """Append frames of a :class:`dpm.Simulation` to an HDF5 file (and its XDMF sidecar)."""
+
+    def __init__(self, path: str | Path, sim: Simulation) -> None:
+        from .. import __version__
+
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.file = h5py.File(self.path, "w", libver="latest")
+        f = self.file
+        f.attrs["format"] = FORMAT
+        f.attrs["format_version"] = FORMAT_VERSION
+        f.attrs["dpm_version"] = __version__
+        f.attrs["dt"] = sim.dt
+        f.attrs["gravity"] = sim.gravity
+        f.attrs["integrator"] = sim.integrator.name
+        f.attrs["materials"] = [m.name for m in sim.materials] or [""]
+        f.attrs["boundaries"] = [b.name for b in sim.boundaries] or [""]
+        n_guess = max(len(sim.bodies), 1)
+        g = f.create_group("particles")
+        for name, (width, dtype, _) in FIELDS.items():
+            shape = (0, width) if width else (0,)
+            maxshape = (None, width) if width else (None,)
+            chunk = (min(n_guess, 65536), width) if width else (min(n_guess, 65536),)
+            g.create_dataset(name, shape=shape, maxshape=maxshape, dtype=dtype, chunks=chunk)
+        fr = f.create_group("frames")
+        for name, dtype in (("time", "f8"), ("step", "i8"), ("start", "i8"), ("count", "i8")):
+            fr.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(1024,))
+        nb = max(len(sim.boundaries), 1)
+        bg = f.create_group("boundaries")
+        for name in ("force", "torque"):
+            bg.create_dataset(name, shape=(0, nb, 3), maxshape=(None, nb, 3), dtype="f8",
+                              chunks=(64, nb, 3))
+        f.swmr_mode = True
+        self.frames = 0
+        self.rows = 0
+        self._last_xdmf = 0.0
+
+    def write(self, sim: Simulation) -> None:
+        """Append the current state as a frame and flush it to disk."""
+        b = sim.bodies
+        n = len(b)
+        g = self.file["particles"]
+        for name, (_, _, attr) in FIELDS.items():
+            ds = g[name]
+            ds.resize(self.rows + n, axis=0)
+            ds[self.rows:self.rows + n] = getattr(b, attr)
+        bg = self.file["boundaries"]
+        nb = bg["force"].shape[1]
+        for name in ("force", "torque"):
+            ds = bg[name]
+            ds.resize(self.frames + 1, axis=0)
+            vals = np.zeros((nb, 3))
+            for k, bd in enumerate(sim.boundaries):
+                vals[k] = getattr(bd, name)
+            ds[self.frames] = vals
+        fr = self.file["frames"]
+        for name, value in (("step", sim.step_count), ("start", self.rows), ("count", n)):
+            fr[name].resize(self.frames + 1, axis=0)
+            fr[name][self.frames] = value
+        self.rows += n
+        # the frame count is the length of /frames/time: extended last
+        fr["time"].resize(self.frames + 1, axis=0)
+        fr["time"][self.frames] = sim.time
+        self.frames += 1
+        self.file.flush()
+        now = _time.monotonic()
+        if self.frames == 1 or now - self._last_xdmf > XDMF_INTERVAL_S:
+            self.write_xdmf()
+            self._last_xdmf = now
+
+    def write_xdmf(self) -> None:
+        from .xdmf import write_xdmf_from_arrays
+
+        fr = self.file["frames"]
+        write_xdmf_from_arrays(self.path, fr["time"][:], fr["start"][:], fr["count"][:],
+                               self.rows)
+
+    def flush(self) -> None:
+        if self.file.id.valid:
+            self.file.flush()
+            self.write_xdmf()
+
+    def close(self) -> None:
+        if self.file.id.valid:
+            self.flush()
+            self.file.close()
+
+
+class Run:
+    """A run read back from HDF5 (see :func:`load`).
+
+    ``times``, ``steps`` (n_frames,); ``frame(k)`` a dict of the per-particle arrays of
+    frame k; ``field(name)`` the list of one field over all frames; ``attrs`` the file
+    attributes; ``boundary_force`` (n_frames, n_boundaries, 3).
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        with _open(self.path) as f:
+            self.attrs: dict[str, Any] = dict(f.attrs)
+            n = len(f["frames/time"])
+            self.times = f["frames/time"][:n]
+            self.steps = f["frames/step"][:n]
+            self.start = f["frames/start"][:n]
+            self.count = f["frames/count"][:n]
+            self.boundary_force = f["boundaries/force"][:n]
+            self.boundary_torque = f["boundaries/torque"][:n]
+
+    def __len__(self) -> int:
+        return len(self.times)
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.times)
+
+    def frame(self, k: int) -> dict[str, np.ndarray]:
+        if not -len(self) <= k < len(self):
+            raise IndexError(f"frame {k} out of range for {len(self)} frames")
+        k = k % len(self)
+        a, n = int(self.start[k]), int(self.count[k])
+        with _open(self.path) as f:
+            out = {name: f["particles"][name][a:a + n] for name in FIELDS}
+        out["time"] = float(self.times[k])
+        out["step"] = int(self.steps[k])
+        return out
+
+    def field(self, name: str) -> list[np.ndarray]:
+        if name not in FIELDS:
+            raise KeyError(f"unknown field {name!r}; fields: {', '.join(FIELDS)}")
+        with _open(self.path) as f:
+            ds = f["particles"][name]
+            return [ds[int(a):int(a) + int(n)] for a, n in zip(self.start, self.count,
+                                                               strict=True)]
+
+
+def _open(path: Path) -> h5py.File:
+    # swmr=True reads a file that a writer still holds open or that a killed run left behind
+    return h5py.File(path, "r", libver="latest", swmr=True)
+
+
+def load(path: str | Path) -> Run:
+    """Read a dpm HDF5 run back."""
+    return Run(path)

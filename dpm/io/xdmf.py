@@ -1,0 +1,64 @@
+"""XDMF sidecar so ParaView (Xdmf3 reader) opens a dpm HDF5 run as particles over time."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+
+#: attribute name -> (width, HDF5 number type, precision)
+_ATTRS = {
+    "id": (0, "Int", 8),
+    "velocity": (3, "Float", 8),
+    "angular_velocity": (3, "Float", 8),
+    "orientation": (4, "Float", 8),
+    "radius": (0, "Float", 8),
+    "mass": (0, "Float", 8),
+}
+
+
+def _slab(h5name: str, field: str, start: int, count: int, width: int, rows: int,
+          ntype: str, prec: int) -> str:
+    if width:
+        dims, sel, full = f"{count} {width}", f"{start} 0 1 1 {count} {width}", f"{rows} {width}"
+        ndim = 2
+    else:
+        dims, sel, full = f"{count}", f"{start} 1 {count}", f"{rows}"
+        ndim = 1
+    return (f'<DataItem ItemType="HyperSlab" Dimensions="{dims}" Type="HyperSlab">'
+            f'<DataItem Dimensions="3 {ndim}" Format="XML">{sel}</DataItem>'
+            f'<DataItem Dimensions="{full}" NumberType="{ntype}" Precision="{prec}" '
+            f'Format="HDF">{h5name}:/particles/{field}</DataItem></DataItem>')
+
+
+def write_xdmf_from_arrays(h5path: Path, times, starts, counts, rows: int) -> Path:
+    """Write ``<run>.xdmf`` beside ``h5path`` for the given frame table."""
+    h5path = Path(h5path)
+    name = h5path.name
+    out = ['<?xml version="1.0" ?>', '<Xdmf Version="3.0"><Domain>',
+           '<Grid Name="particles" GridType="Collection" CollectionType="Temporal">']
+    for t, a, n in zip(times, starts, counts, strict=True):
+        a, n = int(a), int(n)
+        out.append(f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
+                   f'<Topology TopologyType="Polyvertex" NumberOfElements="{n}"/>'
+                   f'<Geometry GeometryType="XYZ">'
+                   f'{_slab(name, "position", a, n, 3, rows, "Float", 8)}</Geometry>')
+        for field, (w, ntype, prec) in _ATTRS.items():
+            kind = {0: "Scalar", 3: "Vector", 4: "Matrix"}[w]
+            out.append(f'<Attribute Name="{field}" AttributeType="{kind}" Center="Node">'
+                       f'{_slab(name, field, a, n, w, rows, ntype, prec)}</Attribute>')
+        out.append("</Grid>")
+    out.append("</Grid></Domain></Xdmf>")
+    path = h5path.with_suffix(".xdmf")
+    tmp = path.with_suffix(".xdmf.tmp")
+    tmp.write_text("\n".join(out))
+    tmp.replace(path)
+    return path
+
+
+def write_xdmf(h5path: str | Path) -> Path:
+    """(Re)write the XDMF sidecar of an existing dpm HDF5 run."""
+    with h5py.File(h5path, "r", libver="latest", swmr=True) as f:
+        n = len(f["frames/time"])
+        return write_xdmf_from_arrays(Path(h5path), f["frames/time"][:n], f["frames/start"][:n],
+                                      f["frames/count"][:n], len(f["particles/id"]))

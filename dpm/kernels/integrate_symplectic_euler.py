@@ -1,0 +1,32 @@
+"""Symplectic (semi-implicit) Euler, first order (Hairer, Lubich & Wanner 2006, §I.1).
+
+    v_{n+1} = v_n + dt F(x_n, v_n) / m        omega_{n+1} = omega_n + dt T_n / I
+    x_{n+1} = x_n + dt v_{n+1}                q_{n+1} = exp(omega_{n+1} dt / 2) q_n
+
+All work happens after the force evaluation. Rotation in the world frame with a scalar
+moment of inertia (spheres).
+"""
+
+
+from .config import jit
+from .quaternion import rotate_by_angular_velocity
+
+
+@jit
+def pre_force(pos, vel, quat, angvel, force, torque, invmass, invinertia, dt):
+    """Nothing to do before the forces."""
+    return
+
+
+@jit
+def post_force(pos, vel, quat, angvel, force, torque, invmass, invinertia, dt):
+    """Kick then drift with the new velocity."""
+    for i in range(pos.shape[0]):
+        im = invmass[i]
+        for d in range(3):
+            vel[i, d] += dt * force[i, d] * im
+            pos[i, d] += dt * vel[i, d]
+        ii = invinertia[i, 0]
+        for d in range(3):
+            angvel[i, d] += dt * torque[i, d] * ii
+        rotate_by_angular_velocity(quat, i, angvel[i, 0], angvel[i, 1], angvel[i, 2], dt)

@@ -1,0 +1,36 @@
+"""Hertz-Mindlin contact law with Tsuji-type damping (as in LIGGGHTS ``hertz``/``history``).
+
+Normal (Hertz 1882; damping Tsuji et al. 1992, Antypov & Elliott 2011):
+    a      = sqrt(R* delta)
+    k_n    = 4/3 E* a           F_n = max(0, k_n delta + c_n delta')
+    S_n    = 2 E* a             c_n = 2 sqrt(5/6) beta sqrt(S_n m*)
+Tangential (Mindlin 1949, no-slip stiffness):
+    k_t    = 8 G* a             c_t = 2 sqrt(5/6) beta sqrt(k_t m*)
+    spring with history and Coulomb limit mu F_n (:mod:`.tangential`)
+with beta = -ln e / sqrt(ln^2 e + pi^2).
+
+pair_params row: [E*, G*, beta, mu, 0, 0, 0, mu_r]
+(slot 7: rolling friction, read by the step)
+"""
+
+import math
+
+from .config import jit
+from .tangential import spring_coulomb
+
+SQRT_5_6 = math.sqrt(5.0 / 6.0)
+
+
+@jit
+def hertz_mindlin(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
+    """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
+    a = math.sqrt(reff * delta)
+    kn = 4.0 / 3.0 * p[0] * a
+    cn = 2.0 * SQRT_5_6 * p[2] * math.sqrt(2.0 * p[0] * a * meff)
+    fn = kn * delta + cn * ddelta
+    if fn < 0.0:
+        fn = 0.0
+    kt = 8.0 * p[1] * a
+    ct = 2.0 * SQRT_5_6 * p[2] * math.sqrt(kt * meff)
+    ftx, fty, ftz = spring_coulomb(kt, ct, p[3], fn, vtx, vty, vtz, nx, ny, nz, dt, hist, k)
+    return fn, ftx, fty, ftz

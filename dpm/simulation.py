@@ -1,0 +1,578 @@
+"""The Simulation: owns the state, the scene description and the run loop."""
+
+from __future__ import annotations
+
+import math
+import time as _time
+import warnings
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from . import plan as _plan
+from .boundaries.base import Boundary
+from .errors import ParameterError, SceneError, UnstableRunError
+from .impact.base import ImpactModel
+from .kernels import neighbours
+from .kernels.step import STATUS_NAN, STATUS_OK, STATUS_OVERFLOW, STATUS_OVERLAP
+from .material import Material
+from .parameters import Parameter, validate
+from .plugins import registry
+from .shapes.base import Shape
+from .state import Bodies, Contacts, Elements, Walls
+from .timestep import TimeStepReport
+
+DT_CHECKS = ("refuse", "warn", "off")
+
+
+class Simulation:
+    """A DEM simulation of rigid bodies made of sphere elements.
+
+    Parameters
+    ----------
+    dt : float
+        Time step [s], > 0.
+    gravity : 3-vector
+        Gravitational acceleration [m/s2].
+    integrator : str
+        Registered integrator name (``dpm plugins`` lists them).
+    skin : float, optional
+        Verlet skin [m]; default 0.2 x the smallest element diameter.
+    dt_check : {"refuse", "warn", "off"}
+        What to do when dt exceeds the critical step (:class:`dpm.timestep.TimeStepReport`).
+    max_overlap : float
+        Largest overlap / radius tolerated during a run before it stops as unstable.
+    overlap_tolerance : float
+        Largest initial overlap / radius accepted at the first step.
+
+    Order of one step (see :mod:`dpm.kernels.step`): integrator pre-force part, element
+    positions, neighbour list (rebuilt when an element moved more than skin/2), gravity and
+    contact forces, integrator post-force part. Hooks ``dpm_before_step``/``dpm_after_step``
+    run around steps, ``dpm_on_output`` after each frame.
+
+    Example
+    -------
+    >>> sim = Simulation(dt=1e-5, gravity=(0, 0, -9.81))
+    """
+
+    parameters = {
+        "dt": Parameter(low=0.0, low_open=True, unit="s", doc="time step"),
+        "gravity": Parameter(default=(0.0, 0.0, 0.0), kind="vector", unit="m/s2"),
+        "integrator": Parameter(default="velocity_verlet", kind="str"),
+        "skin": Parameter(default=None, low=0.0, low_open=True, unit="m"),
+        "dt_check": Parameter(default="refuse", kind="str"),
+        "max_overlap": Parameter(default=0.5, low=0.0, high=2.0, low_open=True),
+        "overlap_tolerance": Parameter(default=0.01, low=0.0),
+    }
+
+    def __init__(self, dt: float, gravity: Sequence[float] = (0.0, 0.0, 0.0),
+                 integrator: str = "velocity_verlet", skin: float | None = None,
+                 dt_check: str = "refuse", max_overlap: float = 0.5,
+                 overlap_tolerance: float = 0.01) -> None:
+        v = validate("Simulation()", self.parameters, dict(
+            dt=dt, gravity=gravity, integrator=integrator, skin=skin, dt_check=dt_check,
+            max_overlap=max_overlap, overlap_tolerance=overlap_tolerance))
+        if v["dt_check"] not in DT_CHECKS:
+            raise ParameterError(f"Simulation(): dt_check={dt_check!r}; allowed: "
+                                 f"{', '.join(DT_CHECKS)}")
+        self._registry = registry()
+        self.integrator = self._registry.lookup("integrator", integrator,
+                                                "Simulation()")()
+        self.dt = float(v["dt"])
+        self.gravity = np.asarray(v["gravity"], float)
+        self.skin = v["skin"]
+        self.dt_check = v["dt_check"]
+        self.max_overlap = float(v["max_overlap"])
+        self.overlap_tolerance = float(v["overlap_tolerance"])
+        self.materials: list[Material] = []
+        self._contacts: dict[tuple[int, int], ImpactModel] = {}
+        self.boundaries: list[Boundary] = []
+        self.bodies = Bodies()
+        self.elements = Elements()
+        self.contacts = Contacts()
+        self.walls: Walls | None = None
+        self.time = 0.0
+        self.step_count = 0
+        self.rebuild_count = 0
+        self._next_id = 0
+        self._prepared = False
+        self._forces_valid = False
+        self._writer = None
+        self._output_every: int | None = None
+        self._diag = np.zeros(8)
+        self._module = None
+        self._pair_model = np.zeros((0, 0), np.int64)
+        self._pair_params = np.zeros((0, 0, 8))
+
+    # ----------------------------------------------------------------- scene building
+    def _material_index(self, m: Material, call: str) -> int:
+        if not isinstance(m, Material):
+            raise ParameterError(f"{call}: material={m!r} must be a dpm.Material")
+        for k, known in enumerate(self.materials):
+            if known is m:
+                return k
+        if any(known.name == m.name for known in self.materials):
+            raise ParameterError(f"{call}: another material is already named {m.name!r}")
+        self.materials.append(m)
+        return len(self.materials) - 1
+
+    def contact(self, a: Material, b: Material, model: str = "hertz_mindlin",
+                **params: Any) -> ImpactModel:
+        """Set the impact model of the material pair (a, b) with its parameters.
+
+        ``params`` are the model's (``dpm plugins`` and ``docs/impact-models.md`` list
+        them), e.g. ``restitution=0.3, friction=0.5, rolling_friction=0.0``.
+        """
+        call = f"sim.contact({getattr(a, 'name', a)}, {getattr(b, 'name', b)})"
+        ia = self._material_index(a, call)
+        ib = self._material_index(b, call)
+        cls = self._registry.lookup("impact_model", model, call)
+        law = cls(call=call, **params)
+        if law.needs_elastic_constants:
+            missing = [f"{m.name}.{p}" for m in (a, b) for p in ("young", "poisson")
+                       if getattr(m, p) is None]
+            if missing:
+                raise ParameterError(f"{call}: model={model!r} needs young and poisson; "
+                                     f"missing: {', '.join(missing)}")
+        self._contacts[(ia, ib)] = law
+        self._contacts[(ib, ia)] = law
+        self._prepared = False
+        return law
+
+    def add_boundary(self, kind: str, material: Material, **params: Any) -> Boundary:
+        """Add a boundary of a registered kind (``plane``, ``box``, ...); return it."""
+        call = f"sim.add_boundary({kind!r})"
+        cls = self._registry.lookup("boundary", kind, call)
+        self._material_index(material, call)
+        b = cls(material, call=call, **params)
+        self.boundaries.append(b)
+        self._prepared = False
+        self._forces_valid = False
+        return b
+
+    def add_particles(self, shape: str | Shape, material: Material,
+                      positions: np.ndarray | Sequence[Sequence[float]],
+                      velocities: np.ndarray | None = None,
+                      angular_velocities: np.ndarray | None = None,
+                      orientations: np.ndarray | None = None, **shape_params: Any) -> np.ndarray:
+        """Add bodies of ``shape`` (a registered name or a Shape instance); return their ids.
+
+        ``positions`` (N, 3) [m]; ``velocities``, ``angular_velocities`` (N, 3) [m/s,
+        rad/s]; ``orientations`` (N, 4) unit quaternions (w, x, y, z). Shape parameters are
+        keyword arguments, e.g. ``radius=1e-3`` (scalar or one per particle).
+        """
+        call = f"sim.add_particles({shape if isinstance(shape, str) else type(shape).__name__!r})"
+        imat = self._material_index(material, call)
+        pos = _rows(call, "positions", positions, 3)
+        n = len(pos)
+        vel = (np.zeros((n, 3)) if velocities is None
+               else _rows(call, "velocities", velocities, 3, n))
+        ang = (np.zeros((n, 3)) if angular_velocities is None
+               else _rows(call, "angular_velocities", angular_velocities, 3, n))
+        if orientations is None:
+            quat = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
+        else:
+            quat = _rows(call, "orientations", orientations, 4, n)
+            norm = np.linalg.norm(quat, axis=1)
+            if np.any(norm == 0):
+                raise ParameterError(f"{call}: orientations has a zero quaternion at row "
+                                     f"{int(np.argmin(norm))}")
+            quat = quat / norm[:, None]
+        if isinstance(shape, Shape):
+            sh = shape
+        else:
+            cls = self._registry.lookup("shape", shape, call)
+            sh = cls(call=call, **shape_params)
+        batch = sh.build(n, material.density)
+        first = len(self.bodies)
+        ids = np.arange(self._next_id, self._next_id + n, dtype=np.int64)
+        self._next_id += n
+        self.bodies.append(
+            id=ids, position=pos, velocity=vel, angular_velocity=ang, orientation=quat,
+            force=np.zeros((n, 3)), torque=np.zeros((n, 3)), mass=batch.mass,
+            inertia=batch.inertia, invmass=1.0 / batch.mass, invinertia=1.0 / batch.inertia,
+            radius=batch.bounding_radius, material=np.full(n, imat),
+            shape=np.zeros(n, np.int64))
+        owner = np.repeat(np.arange(first, first + n), batch.element_count)
+        self.elements.append(owner, batch.element_offset, batch.element_radius,
+                             np.full(len(owner), imat))
+        self._prepared = False
+        self._forces_valid = False
+        return ids
+
+    def output(self, path: str, every: float | None = None,
+               every_steps: int | None = None) -> None:
+        """Write frames to HDF5 at ``path`` (+ XDMF beside it) every ``every`` seconds or
+        ``every_steps`` steps; the current state is written as the first frame."""
+        from .io.hdf5 import Writer
+
+        if (every is None) == (every_steps is None):
+            raise ParameterError("sim.output(): give exactly one of every (s) or every_steps")
+        if every is not None:
+            validate("sim.output()", {"every": Parameter(low=0.0, low_open=True, unit="s")},
+                     {"every": every})
+            every_steps = max(1, round(every / self.dt))
+        validate("sim.output()", {"every_steps": Parameter(low=1, kind="float")},
+                 {"every_steps": every_steps})
+        if self._writer is not None:
+            self._writer.close()
+        self._writer = Writer(path, self)
+        self._output_every = int(every_steps)
+        self._frame_pending = True
+
+    def close(self) -> None:
+        """Close the output file (also done at the end of :meth:`run`)."""
+        if self._writer is not None:
+            self._writer.close()
+
+    # ----------------------------------------------------------------- checks
+    def time_step_report(self) -> TimeStepReport:
+        """Rayleigh step and shortest contact duration of the current scene."""
+        b = self.bodies
+        er = self.elements.radius
+        speed = float(np.max(np.linalg.norm(b.velocity, axis=1), initial=0.0))
+        g = float(np.linalg.norm(self.gravity))
+        if g > 0 and len(b):
+            h = float(np.ptp(b.position @ (self.gravity / g))) + 2 * float(b.radius.max())
+            speed = max(speed, math.sqrt(2 * g * h))
+        speed = max(speed, 1e-3)
+        rayleigh = None
+        tc, pair = None, ""
+        present = sorted(set(int(m) for m in b.material))
+        wall_mats = sorted({self._material_index(x.material, "") for x in self.boundaries})
+        for ia in present:
+            rmin_a = float(er[self.elements.material == ia].min())
+            mmin_a = float(b.mass[b.material == ia].min())
+            for ib in sorted(set(present) | set(wall_mats)):
+                law = self._contacts.get((ia, ib))
+                if law is None:
+                    continue
+                ma, mb = self.materials[ia], self.materials[ib]
+                if ib in present:
+                    rmin_b = float(er[self.elements.material == ib].min())
+                    mmin_b = float(b.mass[b.material == ib].min())
+                    meff = mmin_a * mmin_b / (mmin_a + mmin_b)
+                    reff = rmin_a * rmin_b / (rmin_a + rmin_b)
+                    t = law.contact_time(ma, mb, meff, reff, speed)
+                    if tc is None or t < tc:
+                        tc, pair = t, f"{ma.name}-{mb.name}"
+                if ib in wall_mats:
+                    t = law.contact_time(ma, mb, mmin_a, rmin_a, speed)
+                    if tc is None or t < tc:
+                        tc, pair = t, f"{ma.name}-wall {mb.name}"
+                if law.needs_elastic_constants:
+                    r = ma.rayleigh_time_step(rmin_a)
+                    if r is not None and (rayleigh is None or r < rayleigh):
+                        rayleigh = r
+        return TimeStepReport(self.dt, rayleigh, tc, speed, pair)
+
+    def _validate_scene(self) -> None:
+        problems: list[str] = []
+        b = self.bodies
+        if len(b) == 0:
+            problems.append("the scene has no particles (sim.add_particles)")
+        for name in ("position", "velocity", "angular_velocity", "orientation"):
+            arr = getattr(b, name)
+            bad = ~np.all(np.isfinite(arr), axis=1)
+            if np.any(bad):
+                problems.append(f"{name} is NaN or inf for particle id(s) "
+                                f"{_few(b.id[bad])}")
+        # every material pair that can meet needs a contact law
+        present = sorted(set(int(m) for m in b.material))
+        missing = []
+        for i, ia in enumerate(present):
+            for ib in present[i:]:
+                if (ia, ib) not in self._contacts:
+                    missing.append(f"{self.materials[ia].name}-{self.materials[ib].name}")
+            for bd in self.boundaries:
+                ib = self._material_index(bd.material, "")
+                if (ia, ib) not in self._contacts:
+                    pair = f"{self.materials[ia].name}-{bd.material.name} ({bd.name})"
+                    if pair not in missing:
+                        missing.append(pair)
+        if missing:
+            problems.append("no contact law for material pair(s) " + ", ".join(missing)
+                            + "; set them with sim.contact(a, b, model=..., ...)")
+        # particles outside a boundary
+        if len(b):
+            for k, bd in enumerate(self.boundaries):
+                out = bd.outside(b.position, b.radius)
+                if np.any(out):
+                    problems.append(f"{int(out.sum())} particle(s) lie outside boundary {k} "
+                                    f"({bd.name}): id(s) {_few(b.id[out])}")
+        if problems:
+            raise SceneError("scene check before the first step:\n  " + "\n  ".join(problems))
+
+    def _check_initial_overlaps(self) -> None:
+        e = self.elements
+        if len(e) < 2:
+            return
+        pairs = self.contacts.start[-1]
+        if pairs == 0:
+            return
+        i = np.repeat(np.arange(len(e)), np.diff(self.contacts.start))
+        j = self.contacts.j[:pairs]
+        d = np.linalg.norm(e.position[i] - e.position[j], axis=1)
+        ratio = (e.radius[i] + e.radius[j] - d) / np.minimum(e.radius[i], e.radius[j])
+        k = int(np.argmax(ratio))
+        if ratio[k] > self.overlap_tolerance:
+            n_bad = int(np.sum(ratio > self.overlap_tolerance))
+            ida, idb = self.bodies.id[e.owner[i[k]]], self.bodies.id[e.owner[j[k]]]
+            raise SceneError(
+                f"initial overlap: {n_bad} pair(s) overlap more than overlap_tolerance="
+                f"{self.overlap_tolerance:g} of the smaller radius; worst: particles {ida} and "
+                f"{idb} overlap by {ratio[k]:.3g} of the radius")
+
+    def _prepare(self) -> None:
+        """Validate the scene, pack the tables, pick and compile the step kernels."""
+        self._validate_scene()
+        report = self.time_step_report()
+        refuse, warn = report.problems()
+        if self.dt_check == "refuse" and refuse:
+            raise ParameterError("Simulation(): time step too large:\n  " + "\n  ".join(refuse)
+                                 + "\n  (pass dt_check='warn' to run anyway)")
+        if self.dt_check != "off":
+            for w in (refuse + warn):
+                warnings.warn(w, stacklevel=3)
+        # material-pair tables: one law index per distinct model class
+        nm = len(self.materials)
+        laws: list[tuple[str, str]] = []
+        self._pair_model = np.zeros((nm, nm), np.int64)
+        self._pair_params = np.zeros((nm, nm, 8))
+        for (ia, ib), law in self._contacts.items():
+            if law.kernel not in laws:
+                laws.append(law.kernel)
+            self._pair_model[ia, ib] = laws.index(law.kernel)
+            self._pair_params[ia, ib] = law.pair_row(self.materials[ia], self.materials[ib])
+        self._module = _plan.step_module(laws, self.integrator.kernel_module)
+        # walls
+        pts, nrm, mats, owners = [], [], [], []
+        for k, bd in enumerate(self.boundaries):
+            p, n = bd.planes()
+            pts.append(p)
+            nrm.append(n)
+            mats += [self._material_index(bd.material, "")] * len(p)
+            owners += [k] * len(p)
+        n_el = len(self.elements)
+        self.walls = Walls(np.concatenate(pts) if pts else np.zeros((0, 3)),
+                           np.concatenate(nrm) if nrm else np.zeros((0, 3)), mats, owners, n_el)
+        if self.skin is None:
+            self.skin = 0.4 * float(self.elements.radius.min())
+        self._has_offsets = bool(np.any(self.elements.offset != 0.0))
+        if len(self.contacts.start) != n_el + 1:
+            self.contacts.reset(n_el, 16 * n_el)
+        self._module.update_element_positions(
+            self.bodies.position, self.bodies.orientation, self.elements.owner,
+            self.elements.offset, self.elements.position, self._has_offsets)
+        self._rebuild()
+        self._check_initial_overlaps()
+        self._prepared = True
+
+    def _rebuild(self) -> None:
+        e, c = self.elements, self.contacts
+        while True:
+            need = neighbours.build_neighbour_list(e.position, e.radius, e.owner, self.skin,
+                                                   c.start, c.j, c.history, c.new_start,
+                                                   c.new_j, c.new_history)
+            if need <= c.capacity:
+                break
+            c.grow(need)
+        e.reference[:] = e.position
+        self.rebuild_count += 1
+
+    def _args(self) -> tuple:
+        b, e, c, w = self.bodies, self.elements, self.contacts, self.walls
+        return (self.gravity, self.skin, self.max_overlap, b.position, b.velocity,
+                b.orientation, b.angular_velocity, b.force, b.torque, b.mass, b.invmass,
+                b.invinertia, e.owner, e.offset, e.radius, e.material, e.position, e.reference,
+                self._has_offsets, c.start, c.j, c.history, c.new_start, c.new_j,
+                c.new_history, w.point, w.normal, w.velocity, w.material, w.force, w.history,
+                self._pair_model, self._pair_params, self._diag)
+
+    def _prime_forces(self) -> None:
+        """Forces of the current state without advancing contact history (dt = 0)."""
+        b, e, c, w = self.bodies, self.elements, self.contacts, self.walls
+        self._module.compute_forces(
+            0.0, self.gravity, b.position, b.velocity, b.angular_velocity, b.force, b.torque,
+            b.mass, b.invmass, e.owner, e.radius, e.material, e.position, c.start, c.j,
+            c.history, w.point, w.normal, w.velocity, w.material, w.force, w.history,
+            self._pair_model, self._pair_params, self._diag)
+        self._forces_valid = True
+
+    # ----------------------------------------------------------------- running
+    def run(self, steps: int | None = None, until: float | None = None,
+            progress: bool | None = None) -> None:
+        """Advance ``steps`` steps, or until simulated time ``until`` [s].
+
+        Shows a progress bar (simulated time, steps/s, ETA) when ``progress`` is True, or
+        when None and standard error is a terminal. Raises :class:`UnstableRunError` with a
+        diagnosis if the run goes unstable; frames written so far stay readable.
+        """
+        if (steps is None) == (until is None):
+            raise ParameterError("sim.run(): give exactly one of steps or until")
+        if steps is not None:
+            validate("sim.run()", {"steps": Parameter(low=0)}, {"steps": steps})
+            nsteps = int(steps)
+        else:
+            validate("sim.run()", {"until": Parameter(low=self.time, unit="s")},
+                     {"until": until})
+            nsteps = max(0, math.ceil((until - self.time) / self.dt - 1e-9))
+        if not self._prepared:
+            self._prepare()
+        if not self._forces_valid:
+            self._prime_forces()
+            self._update_boundary_loads()
+        from .progress import Progress
+
+        hooks = self._registry.manager.hook
+        per_step_hooks = bool(hooks.dpm_before_step.get_hookimpls()
+                              or hooks.dpm_after_step.get_hookimpls())
+        bar = Progress(nsteps, self.dt, self.time, enabled=progress)
+        if self._writer is not None and getattr(self, "_frame_pending", False):
+            self._write_frame()
+        done = 0
+        chunk = 10
+        try:
+            while done < nsteps:
+                n = min(nsteps - done, chunk)
+                if per_step_hooks:
+                    n = 1
+                if self._writer is not None:
+                    n = min(n, self._output_every - self.step_count % self._output_every)
+                if per_step_hooks:
+                    hooks.dpm_before_step(sim=self)
+                t0 = _time.perf_counter()
+                ran = self._advance(n)
+                elapsed = _time.perf_counter() - t0
+                done += ran
+                if per_step_hooks:
+                    hooks.dpm_after_step(sim=self)
+                if self._writer is not None and self.step_count % self._output_every == 0:
+                    self._write_frame()
+                bar.update(ran, self.time)
+                # aim at ~0.1 s of work per call: Python runs only at these events
+                if elapsed > 0:
+                    chunk = int(min(max(chunk * min(0.1 / elapsed, 4.0), 1), 100000))
+        finally:
+            bar.close()
+            if self._writer is not None:
+                self._writer.flush()
+
+    def _advance(self, n: int) -> int:
+        """Run ``n`` steps in as few kernel calls as possible; diagnose a failure."""
+        d = self._diag
+        total = 0
+        while total < n:
+            self._module.run_steps(n - total, self.dt, *self._args())
+            ran = int(d[1])
+            if d[0] == STATUS_OVERFLOW:  # stopped after pre_force: grow, finish that step
+                self.contacts.grow(int(d[3]))
+                d[0] = STATUS_OK
+                self._module.finish_step(self.dt, *self._args())
+                if d[0] in (STATUS_OK, STATUS_OVERLAP):
+                    ran += 1
+            total += ran
+            if d[0] != STATUS_OK:
+                break
+        self.step_count += total
+        self.time = self.step_count * self.dt
+        self.rebuild_count += int(d[2])
+        d[2] = 0
+        self._update_boundary_loads()
+        if d[0] == STATUS_NAN:
+            self._fail("a position became NaN")
+        if d[0] == STATUS_OVERLAP:
+            self._fail(f"an overlap reached {d[4]:.3g} of the radius (max_overlap="
+                       f"{self.max_overlap:g})")
+        self._check_speeds()
+        return total
+
+    def _check_speeds(self) -> None:
+        b = self.bodies
+        v = np.sqrt(np.einsum("ij,ij->i", b.velocity, b.velocity))
+        k = int(np.argmax(v))
+        if not np.isfinite(v[k]):
+            self._fail("a velocity became NaN or inf")
+        if v[k] * self.dt > 0.5 * b.radius[k]:
+            self._fail(f"particle {b.id[k]} moves {v[k] * self.dt:.3g} m per step, more than "
+                       f"half its radius {b.radius[k]:.3g} m (speed {v[k]:.3g} m/s): energy is "
+                       "exploding")
+
+    def _fail(self, what: str) -> None:
+        rep = self.time_step_report() if np.all(np.isfinite(self.bodies.velocity)) else None
+        hint = ""
+        if rep is not None and rep.contact_time is not None:
+            hint = (f"; shortest contact {rep.contact_time:.3g} s = "
+                    f"{rep.steps_per_contact:.1f} steps")
+        if rep is not None and rep.rayleigh is not None:
+            hint += f"; Rayleigh step {rep.rayleigh:.3g} s"
+        written = ""
+        if self._writer is not None:
+            self._writer.flush()
+            written = (f"; {self._writer.frames} frame(s) written to {self._writer.path} "
+                       "stay readable")
+        self.close()
+        raise UnstableRunError(
+            f"unstable run at step {self.step_count} (t = {self.time:.6g} s): {what}. "
+            f"dt = {self.dt:g} s{hint}. Reduce dt, raise the damping or check the "
+            f"stiffness{written}")
+
+    def _update_boundary_loads(self) -> None:
+        w = self.walls
+        for bd in self.boundaries:
+            bd.force = np.zeros(3)
+            bd.torque = np.zeros(3)
+        if w is None:
+            return
+        for k in range(len(w.point)):
+            bd = self.boundaries[w.owner[k]]
+            bd.force = bd.force + w.force[k]
+
+    def _write_frame(self) -> None:
+        self._frame_pending = False
+        self._writer.write(self)
+        self._registry.manager.hook.dpm_on_output(sim=self, frame=self._writer.frames - 1,
+                                                  path=self._writer.path)
+
+    # ----------------------------------------------------------------- measures
+    def kinetic_energy(self) -> float:
+        """Translational plus rotational kinetic energy [J] (principal frame)."""
+        b = self.bodies
+        trans = 0.5 * np.sum(b.mass * np.einsum("ij,ij->i", b.velocity, b.velocity))
+        w_body = _to_body(b.orientation, b.angular_velocity)
+        rot = 0.5 * np.sum(b.inertia * w_body**2)
+        return float(trans + rot)
+
+    def momentum(self) -> np.ndarray:
+        """Total linear momentum [kg m/s]."""
+        return (self.bodies.mass[:, None] * self.bodies.velocity).sum(axis=0)
+
+
+def _to_body(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Rotate world vectors v into the body frames of quaternions q (R(q)^T v)."""
+    w, x, y, z = q.T
+    qv = np.stack([-x, -y, -z], axis=1)  # conjugate
+    t = 2.0 * np.cross(qv, v)
+    return v + w[:, None] * t + np.cross(qv, t)
+
+
+def _rows(call: str, name: str, value: Any, width: int, n: int | None = None) -> np.ndarray:
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{call}: {name} is not numeric") from None
+    if arr.ndim == 1 and arr.size == width and n in (None, 1):
+        arr = arr[None]
+    if arr.ndim != 2 or arr.shape[1] != width or (n is not None and len(arr) != n):
+        want = f"({n if n is not None else 'N'}, {width})"
+        raise ParameterError(f"{call}: {name} has shape {arr.shape}; allowed: {want}")
+    if not np.all(np.isfinite(arr)):
+        row = int(np.argmax(~np.all(np.isfinite(arr), axis=1)))
+        raise ParameterError(f"{call}: {name} contains NaN or inf (row {row})")
+    return np.ascontiguousarray(arr)
+
+
+def _few(ids: np.ndarray, k: int = 5) -> str:
+    s = ", ".join(str(int(i)) for i in ids[:k])
+    return s + (f", ... ({len(ids)} in all)" if len(ids) > k else "")

@@ -1,0 +1,55 @@
+"""Critical time steps of a scene: Rayleigh wave step and shortest contact duration."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+#: fewer steps per contact than this is refused (explicit schemes go unstable near 2/omega)
+MIN_STEPS_PER_CONTACT = 5.0
+#: fewer steps per contact than this gives a warning (restitution error above ~1 %)
+WARN_STEPS_PER_CONTACT = 20.0
+#: fraction of the Rayleigh step above which a warning is given / the run is refused
+WARN_RAYLEIGH_FRACTION = 0.3
+MAX_RAYLEIGH_FRACTION = 1.0
+
+
+@dataclass
+class TimeStepReport:
+    """The scene's time-step limits.
+
+    dt: the step in use; rayleigh: smallest Rayleigh step over Hertz-type materials (or
+    None); contact_time: shortest head-on contact duration over material pairs at
+    ``impact_speed``; ``pair``: the material pair that gives it.
+    """
+
+    dt: float
+    rayleigh: float | None
+    contact_time: float | None
+    impact_speed: float
+    pair: str = ""
+
+    @property
+    def steps_per_contact(self) -> float | None:
+        return None if self.contact_time is None else self.contact_time / self.dt
+
+    def problems(self) -> tuple[list[str], list[str]]:
+        """(refusals, warnings) as sentences with the numbers."""
+        refuse, warn = [], []
+        if self.rayleigh is not None:
+            f = self.dt / self.rayleigh
+            msg = (f"dt={self.dt:g} s is {f:.2f} of the Rayleigh time step {self.rayleigh:.3g} s")
+            if f > MAX_RAYLEIGH_FRACTION:
+                refuse.append(msg + f" (allowed: <= {MAX_RAYLEIGH_FRACTION:g})")
+            elif f > WARN_RAYLEIGH_FRACTION:
+                warn.append(msg + f" (advised: <= {WARN_RAYLEIGH_FRACTION:g})")
+        spc = self.steps_per_contact
+        if spc is not None:
+            msg = (f"dt={self.dt:g} s resolves the shortest contact ({self.pair}, "
+                   f"{self.contact_time:.3g} s at {self.impact_speed:.3g} m/s) with "
+                   f"{spc:.1f} steps")
+            if spc < MIN_STEPS_PER_CONTACT:
+                refuse.append(msg + f" (allowed: >= {MIN_STEPS_PER_CONTACT:g}; "
+                              f"critical dt = {self.contact_time / MIN_STEPS_PER_CONTACT:.3g} s)")
+            elif spc < WARN_STEPS_PER_CONTACT:
+                warn.append(msg + f" (advised: >= {WARN_STEPS_PER_CONTACT:g})")
+        return refuse, warn
