@@ -13,7 +13,7 @@ import numpy as np
 from . import plan as _plan
 from .boundaries.base import Boundary
 from .errors import ParameterError, SceneError, UnstableRunError
-from .impact.base import ImpactModel
+from .impact.base import ImpactModel, PairContext
 from .kernels import neighbours
 from .kernels.step import STATUS_NAN, STATUS_OK, STATUS_OVERFLOW, STATUS_OVERLAP
 from .material import Material
@@ -267,6 +267,22 @@ class Simulation:
                         rayleigh = r
         return TimeStepReport(self.dt, rayleigh, tc, speed, pair)
 
+    def _smallest_pair(self, ia: int, ib: int) -> tuple[float, float]:
+        """(m*, R*) of the smallest bodies of materials ia and ib (a wall material alone
+        counts as an infinitely large, heavy body)."""
+        b, e = self.bodies, self.elements
+
+        def small(k: int) -> tuple[float, float]:
+            sel = b.material == k
+            if not np.any(sel):
+                return math.inf, math.inf
+            return float(b.mass[sel].min()), float(e.radius[e.material == k].min())
+
+        (ma, ra), (mb, rb) = small(ia), small(ib)
+        meff = ma if math.isinf(mb) else mb if math.isinf(ma) else ma * mb / (ma + mb)
+        reff = ra if math.isinf(rb) else rb if math.isinf(ra) else ra * rb / (ra + rb)
+        return meff, reff
+
     def _validate_scene(self) -> None:
         problems: list[str] = []
         b = self.bodies
@@ -344,7 +360,9 @@ class Simulation:
             if law.kernel not in laws:
                 laws.append(law.kernel)
             self._pair_model[ia, ib] = laws.index(law.kernel)
-            self._pair_params[ia, ib] = law.pair_row(self.materials[ia], self.materials[ib])
+            ctx = PairContext(report.impact_speed, *self._smallest_pair(ia, ib))
+            self._pair_params[ia, ib] = law.pair_row(self.materials[ia], self.materials[ib],
+                                                     ctx)
         self._module = _plan.step_module(laws, self.integrator.kernel_module)
         # walls
         pts, nrm, mats, owners = [], [], [], []

@@ -3,13 +3,18 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
+from ..errors import ParameterError
 from ..kernels.config import N_PAIR_PARAMS
 from ..material import Material
 from ..parameters import Parameter, validate
+
+#: rolling resistance models -> id in pair_params slot 6 (see dpm.kernels.rolling)
+ROLLING_MODELS = {"constant_torque": 1}
 
 COMMON = {
     "restitution": Parameter(default=0.5, low=0.0, high=1.0, low_open=True,
@@ -17,7 +22,23 @@ COMMON = {
     "friction": Parameter(default=0.5, low=0.0, doc="Coulomb friction coefficient"),
     "rolling_friction": Parameter(default=0.0, low=0.0,
                                   doc="rolling friction coefficient mu_r (torque mu_r F_n R*)"),
+    "rolling_model": Parameter(default="constant_torque", kind="str",
+                               doc="rolling resistance model: " + ", ".join(ROLLING_MODELS)),
 }
+
+
+@dataclass(frozen=True)
+class PairContext:
+    """What the scene tells a model about a material pair when the tables are packed.
+
+    impact_speed: characteristic impact speed [m/s] (largest initial speed or free-fall
+    speed over the scene's height); meff, reff: effective mass [kg] and radius [m] of the
+    smallest bodies of the pair (a wall counts as infinite).
+    """
+
+    impact_speed: float = 1.0
+    meff: float = 1.0
+    reff: float = 1.0
 
 
 class ImpactModel:
@@ -26,7 +47,8 @@ class ImpactModel:
     Subclass it, declare ``parameters``, name the numba kernel in ``kernel`` as
     ``("package.module", "function")`` with the signature of
     :func:`dpm.kernels.law_linear.linear_spring_dashpot`, and fill the pair constants in
-    :meth:`pair_row` (slot 7 is the rolling friction coefficient, read by the step).
+    :meth:`pair_row` with :meth:`_row` (slots 6 and 7 carry the rolling resistance model
+    and coefficient, read by the step; slots 0..5 are the law's own).
     """
 
     name: ClassVar[str] = ""
@@ -37,8 +59,12 @@ class ImpactModel:
     def __init__(self, call: str | None = None, **params: Any) -> None:
         self.call = call or f"{type(self).__name__}()"
         self.params = validate(self.call, self.parameters, params)
+        rm = self.params.get("rolling_model", "constant_torque")
+        if rm not in ROLLING_MODELS:
+            raise ParameterError(f"{self.call}: rolling_model={rm!r}; allowed: "
+                                 f"{', '.join(ROLLING_MODELS)}")
 
-    def pair_row(self, a: Material, b: Material) -> np.ndarray:
+    def pair_row(self, a: Material, b: Material, context: PairContext) -> np.ndarray:
         """Constants of the kernel for materials ``a`` and ``b`` (length N_PAIR_PARAMS)."""
         raise NotImplementedError
 
@@ -50,7 +76,10 @@ class ImpactModel:
     def _row(self, *values: float) -> np.ndarray:
         row = np.zeros(N_PAIR_PARAMS)
         row[: len(values)] = values
-        row[7] = self.params["rolling_friction"]
+        mu_r = float(self.params.get("rolling_friction", 0.0))
+        if mu_r > 0.0:
+            row[6] = ROLLING_MODELS[self.params.get("rolling_model", "constant_torque")]
+            row[7] = mu_r
         return row
 
 

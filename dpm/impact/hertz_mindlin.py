@@ -25,7 +25,7 @@ class HertzMindlin(ImpactModel):
     kernel = ("dpm.kernels.law_hertz_mindlin", "hertz_mindlin")
     needs_elastic_constants = True
 
-    def pair_row(self, a: Material, b: Material):
+    def pair_row(self, a: Material, b: Material, context):
         return self._row(effective_young(a, b), effective_shear(a, b),
                          hertz_beta(float(self.params["restitution"])), self.params["friction"])
 

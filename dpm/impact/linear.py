@@ -84,7 +84,7 @@ class LinearSpringDashpot(ImpactModel):
     def damping_ratio(self) -> float:
         return damping_ratio_for_restitution(float(self.params["restitution"]))
 
-    def pair_row(self, a, b):
+    def pair_row(self, a, b, context):
         zeta = self.damping_ratio
         zt = self.params["tangential_damping_ratio"]
         return self._row(self.params["stiffness"], zeta, self.params["friction"],

@@ -9,7 +9,8 @@ JIT = dict(cache=True, error_model="numpy", nogil=True)
 #: number of float slots in a material-pair constants row (pair_params[a, b, :])
 N_PAIR_PARAMS = 8
 
-#: number of floats of contact history per contact (tangential spring 3 + rolling 3)
-N_HISTORY = 6
+#: floats of history per contact: 0-2 tangential spring, 3-5 rolling spring,
+#: 6-7 state of the normal law (e.g. plastic overlap)
+N_HISTORY = 8
 
 jit = njit(**JIT)

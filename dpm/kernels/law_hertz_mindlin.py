@@ -9,8 +9,8 @@ Tangential (Mindlin 1949, no-slip stiffness):
     spring with history and Coulomb limit mu F_n (:mod:`.tangential`)
 with beta = -ln e / sqrt(ln^2 e + pi^2).
 
-pair_params row: [E*, G*, beta, mu, 0, 0, 0, mu_r]
-(slot 7: rolling friction, read by the step)
+pair_params row: [E*, G*, beta, mu, 0, 0, rolling model, mu_r]
+(slots 6, 7: rolling resistance model and coefficient, read by the step)
 """
 
 import math

@@ -9,8 +9,8 @@ The damping ratio zeta is solved in the object layer so that the restitution coe
 e = exp(-beta t_c), t_c = (pi - 2 atan(beta/omega)) / omega, beta = zeta omega_0,
 omega = omega_0 sqrt(1 - zeta^2)).
 
-pair_params row: [k_n, zeta, mu, kappa, zeta_t, 0, 0, mu_r]
-(slot 7: rolling friction, read by the step)
+pair_params row: [k_n, zeta, mu, kappa, zeta_t, 0, rolling model, mu_r]
+(slots 6, 7: rolling resistance model and coefficient, read by the step)
 """
 
 import math

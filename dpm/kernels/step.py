@@ -18,17 +18,18 @@ Diagnostics (``diag``): [0] status (0 ok, 1 neighbour list overflow, 2 NaN, 3 ov
 beyond the limit), [1] steps done, [2] rebuilds, [3] pairs needed, [4] largest overlap /
 radius seen, [5] element with that overlap, [6] active contacts in the last force evaluation.
 """
-
+# ruff: noqa: I001  (the bindings block must stay between its markers)
 import math
 
 from .config import jit
-from .integrate_velocity_verlet import post_force, pre_force
-from .law_hertz_mindlin import hertz_mindlin as law_1
+from .neighbours import build_neighbour_list, max_displacement_sq
+from .quaternion import rotate_vector
+from .rolling import rolling_torque
 
 # --- bindings begin (dpm.plan rewrites this block) ---
 from .law_linear import linear_spring_dashpot as law_0
-from .neighbours import build_neighbour_list, max_displacement_sq
-from .quaternion import rotate_vector
+from .law_hertz_mindlin import hertz_mindlin as law_1
+from .integrate_velocity_verlet import pre_force, post_force
 
 
 @jit
@@ -59,29 +60,6 @@ def update_element_positions(b_pos, b_quat, e_owner, e_offset, e_pos, has_offset
             e_pos[e, 0] = b_pos[b, 0]
             e_pos[e, 1] = b_pos[b, 1]
             e_pos[e, 2] = b_pos[b, 2]
-
-
-@jit
-def add_rolling_torque(mu_r, fn, reff, b_angvel, bi, bj, b_torque, sign_j):
-    """Constant rolling-resistance torque T = -mu_r F_n R* w_rel/|w_rel| (Zhou et al. 1999)."""
-    wx = b_angvel[bi, 0]
-    wy = b_angvel[bi, 1]
-    wz = b_angvel[bi, 2]
-    if bj >= 0:
-        wx -= b_angvel[bj, 0]
-        wy -= b_angvel[bj, 1]
-        wz -= b_angvel[bj, 2]
-    w = math.sqrt(wx * wx + wy * wy + wz * wz)
-    if w == 0.0:
-        return
-    t = mu_r * fn * reff / w
-    b_torque[bi, 0] -= t * wx
-    b_torque[bi, 1] -= t * wy
-    b_torque[bi, 2] -= t * wz
-    if bj >= 0:
-        b_torque[bj, 0] += sign_j * t * wx
-        b_torque[bj, 1] += sign_j * t * wy
-        b_torque[bj, 2] += sign_j * t * wz
 
 
 @jit
@@ -182,8 +160,17 @@ def compute_forces(dt, gravity, b_pos, b_vel, b_angvel, b_force, b_torque, b_mas
             b_torque[bj, 0] -= ajy * fz - ajz * fy
             b_torque[bj, 1] -= ajz * fx - ajx * fz
             b_torque[bj, 2] -= ajx * fy - ajy * fx
-            if p[7] > 0.0:
-                add_rolling_torque(p[7], fn, ri * rj / rs, b_angvel, bi, bj, b_torque, 1.0)
+            if p[6] != 0.0:
+                tx, ty, tz = rolling_torque(p, fn, ri * rj / rs, 1.0 / ims,
+                                            b_angvel[bi, 0] - b_angvel[bj, 0],
+                                            b_angvel[bi, 1] - b_angvel[bj, 1],
+                                            b_angvel[bi, 2] - b_angvel[bj, 2], dt, nl_hist, kk)
+                b_torque[bi, 0] += tx
+                b_torque[bi, 1] += ty
+                b_torque[bi, 2] += tz
+                b_torque[bj, 0] -= tx
+                b_torque[bj, 1] -= ty
+                b_torque[bj, 2] -= tz
     # element-plane contacts (one-sided: the normal points into the domain)
     nw = w_point.shape[0]
     for e in range(ne):
@@ -234,8 +221,12 @@ def compute_forces(dt, gravity, b_pos, b_vel, b_angvel, b_force, b_torque, b_mas
             b_torque[b, 0] += ay * fz - az * fy
             b_torque[b, 1] += az * fx - ax * fz
             b_torque[b, 2] += ax * fy - ay * fx
-            if p[7] > 0.0:
-                add_rolling_torque(p[7], fn, r, b_angvel, b, -1, b_torque, 0.0)
+            if p[6] != 0.0:
+                tx, ty, tz = rolling_torque(p, fn, r, b_mass[b], b_angvel[b, 0],
+                                            b_angvel[b, 1], b_angvel[b, 2], dt, w_hist, hk)
+                b_torque[b, 0] += tx
+                b_torque[b, 1] += ty
+                b_torque[b, 2] += tz
     diag[6] = active
     if worst > diag[4]:
         diag[4] = worst
