@@ -1,0 +1,125 @@
+"""Box-settle benchmark: particle-steps per second of dpm and LIGGGHTS on the same scene.
+
+Runs the reference scene (benchmarks/scenes/box_settle, 10,000 spheres, 20,000 steps by
+default) with dpm, and with LIGGGHTS in the same run when the ``liggghts`` binary is on
+PATH (``apt-get install -y liggghts``). Writes benchmarks/results/box_settle.json (both
+figures, their ratio and the mean heights) and box_settle.png.
+
+    python benchmarks/box_settle.py              # full scene
+    python benchmarks/box_settle.py --quick      # 1,000 spheres, 2,000 steps
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import os
+import platform
+import re
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+
+HERE = Path(__file__).resolve().parent
+SCENE = HERE / "scenes" / "box_settle"
+RESULTS = HERE / "results"
+
+
+def _example():
+    spec = importlib.util.spec_from_file_location("box_settle_example",
+                                                  HERE.parent / "examples" / "box_settle.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def run_dpm(lat, steps, warmup=20):
+    ex = _example()
+    csv = ex.initial_packing(*lat)
+    t0 = time.perf_counter()
+    sim = ex.build(csv)
+    sim.run(steps=warmup, progress=False)  # compile (or load from cache) and prime
+    first = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    sim.run(steps=steps - warmup, progress=False)
+    wall = time.perf_counter() - t0
+    n = len(sim.bodies)
+    return {"particles": n, "steps": steps, "timed_steps": steps - warmup, "wall_s": wall,
+            "particle_steps_per_s": n * (steps - warmup) / wall,
+            "time_to_first_steps_s": first, "threads": 1,  # the kernels are serial so far
+            "mean_z_m": float(sim.bodies.position[:, 2].mean()),
+            "neighbour_rebuilds": sim.rebuild_count}
+
+
+def run_liggghts(lat, steps):
+    exe = shutil.which("liggghts")
+    if exe is None:
+        return None
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run(["python3", str(SCENE / "gen_init.py"), *map(str, lat)], cwd=tmp,
+                       check=True, capture_output=True)
+        n = lat[0] * lat[1] * lat[2]
+        shutil.copy(SCENE / "box_settle.liggghts", tmp)
+        t0 = time.perf_counter()
+        out = subprocess.run([exe, "-in", "box_settle.liggghts", "-var", "DATA",
+                              f"box_settle_{n}.data", "-var", "STEPS", str(steps)], cwd=tmp,
+                             check=True, capture_output=True, text=True,
+                             env={**os.environ, "OMP_NUM_THREADS": "1"}).stdout
+        whole = time.perf_counter() - t0
+    loop = float(re.search(r"Loop time of ([0-9.eE+-]+)", out).group(1))
+    rows = [ln.split() for ln in out.splitlines() if re.match(rf"\s+{steps}\s+{n}\s", ln)]
+    return {"particles": n, "steps": steps, "loop_s": loop, "whole_run_s": whole,
+            "particle_steps_per_s": n * steps / loop,
+            "mean_z_m": float(rows[-1][3]) if rows else None}
+
+
+def plot(result, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = ["dpm"] + (["LIGGGHTS"] if result["liggghts"] else [])
+    vals = [result["dpm"]["particle_steps_per_s"]]
+    if result["liggghts"]:
+        vals.append(result["liggghts"]["particle_steps_per_s"])
+    fig, ax = plt.subplots(figsize=(5, 3.2))
+    bars = ax.bar(names, vals, color=["tab:blue", "tab:gray"][: len(vals)])
+    ax.bar_label(bars, labels=[f"{v:.3g}" for v in vals])
+    ax.set_ylabel("particle-steps per second")
+    n, s = result["dpm"]["particles"], result["dpm"]["steps"]
+    ax.set_title(f"box_settle, {n} spheres, {s} steps, 1 core"
+                 + (f"\nratio dpm/LIGGGHTS = {result['ratio']:.2f}" if result["ratio"] else ""))
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true")
+    p.add_argument("--lattice", type=int, nargs=3, default=None)
+    p.add_argument("--steps", type=int, default=None)
+    p.add_argument("--no-liggghts", action="store_true")
+    a = p.parse_args()
+    lat = a.lattice or ((10, 10, 10) if a.quick else (20, 20, 25))
+    steps = a.steps or (2000 if a.quick else 20000)
+    d = run_dpm(lat, steps)
+    lg = None if a.no_liggghts else run_liggghts(lat, steps)
+    result = {"scene": "box_settle", "lattice": lat, "machine": platform.processor()
+              or platform.machine(), "dpm": d, "liggghts": lg,
+              "ratio": d["particle_steps_per_s"] / lg["particle_steps_per_s"] if lg else None,
+              "mean_z_rel_diff": (d["mean_z_m"] / lg["mean_z_m"] - 1)
+              if lg and lg["mean_z_m"] else None}
+    RESULTS.mkdir(exist_ok=True)
+    tag = "box_settle" if not a.quick else "box_settle_quick"
+    (RESULTS / f"{tag}.json").write_text(json.dumps(result, indent=2))
+    plot(result, RESULTS / f"{tag}.png")
+    print(json.dumps(result, indent=2))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,99 @@
+"""Command line: ``dpm run``, ``dpm plugins``, ``dpm xdmf``, ``dpm clear-cache``."""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import sys
+import time
+
+from .errors import DpmError
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from .io.scene import load_scene
+
+    sim, run_kw = load_scene(args.scene)
+    if args.steps is not None:
+        run_kw = {"steps": args.steps}
+    elif args.until is not None:
+        run_kw = {"until": args.until}
+    if not run_kw:
+        raise DpmError(f"{args.scene}: no [run] table and no --steps/--until given")
+    t0 = time.perf_counter()
+    try:
+        sim.run(**run_kw, progress=None if not args.no_progress else False)
+    finally:
+        sim.close()
+    wall = time.perf_counter() - t0
+    n = len(sim.bodies)
+    print(f"{sim.step_count} steps, t = {sim.time:.6g} s, {n} particles, {wall:.1f} s wall "
+          f"({n * sim.step_count / max(wall, 1e-9):.3g} particle-steps/s incl. compile)")
+    if sim._writer is not None:
+        print(f"output: {sim._writer.path} ({sim._writer.frames} frames) + "
+              f"{sim._writer.path.with_suffix('.xdmf').name}")
+    return 0
+
+
+def _cmd_plugins(args: argparse.Namespace) -> int:
+    from .plugins import KINDS, registry
+
+    reg = registry()
+    rows = []
+    for kind in KINDS:
+        for name in reg.names(kind):
+            e = reg.entries[kind][name]
+            doc = (inspect.getdoc(e.cls) or "").splitlines()
+            rows.append((kind, name, f"{e.cls.__module__}.{e.cls.__qualname__}", e.source,
+                         doc[0] if doc else ""))
+    w = [max(len(r[i]) for r in rows) for i in range(4)]
+    print(f"{'kind':<{w[0]}}  {'name':<{w[1]}}  {'class':<{w[2]}}  {'source':<{w[3]}}  summary")
+    for r in rows:
+        print(f"{r[0]:<{w[0]}}  {r[1]:<{w[1]}}  {r[2]:<{w[2]}}  {r[3]:<{w[3]}}  {r[4]}")
+    for source, why in reg.broken:
+        print(f"BROKEN plugin {source}: {why}")
+    return 0
+
+
+def _cmd_xdmf(args: argparse.Namespace) -> int:
+    from .io.xdmf import write_xdmf
+
+    print(write_xdmf(args.run))
+    return 0
+
+
+def _cmd_clear_cache(args: argparse.Namespace) -> int:
+    from .plan import clear_cache
+
+    removed = clear_cache()
+    print(f"removed {len(removed)} cached kernel file(s)")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="dpm", description="Discrete Particle Method (DEM)")
+    sub = p.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("run", help="run a TOML scene file")
+    r.add_argument("scene")
+    g = r.add_mutually_exclusive_group()
+    g.add_argument("--steps", type=int, help="override the scene's [run]")
+    g.add_argument("--until", type=float, help="override the scene's [run] (seconds)")
+    r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    r.set_defaults(func=_cmd_run)
+    sub.add_parser("plugins", help="list registered shapes, boundaries, impact models, "
+                   "integrators").set_defaults(func=_cmd_plugins)
+    x = sub.add_parser("xdmf", help="(re)write the XDMF sidecar of an HDF5 run")
+    x.add_argument("run")
+    x.set_defaults(func=_cmd_xdmf)
+    sub.add_parser("clear-cache", help="delete compiled kernels and generated step modules"
+                   ).set_defaults(func=_cmd_clear_cache)
+    args = p.parse_args(argv)
+    try:
+        return args.func(args)
+    except DpmError as exc:
+        print(f"dpm: error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

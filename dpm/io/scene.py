@@ -1,0 +1,117 @@
+"""TOML scene files: the Python API written down (``dpm run scene.toml``).
+
+Layout (every table mirrors a call; keys are the call's keyword arguments)::
+
+    [simulation]                 # dpm.Simulation(...)
+    dt = 1e-5
+    gravity = [0, 0, -9.81]
+    integrator = "velocity_verlet"
+
+    [materials.glass]            # dpm.Material("glass", ...)
+    density = 2500
+    young = 5e6
+    poisson = 0.45
+
+    [[contacts]]                 # sim.contact(glass, glass, ...)
+    materials = ["glass", "glass"]
+    model = "hertz_mindlin"
+    restitution = 0.3
+    friction = 0.5
+
+    [[boundaries]]               # sim.add_boundary("box", material=glass, ...)
+    kind = "box"
+    material = "glass"
+    lower = [0, 0, 0]
+    upper = [0.042, 0.042, 0.0609]
+    open = ["+z"]
+
+    [[particles]]                # sim.add_particles("sphere", material=glass, ...)
+    shape = "sphere"
+    material = "glass"
+    radius = 1e-3
+    lattice = { lower = [0, 0, 0], upper = [0.042, 0.042, 0.05], spacing = 2.1e-3 }
+    # or csv = "file.csv" (columns x,y,z[,vx,vy,vz[,r]], header line; path relative to
+    # the scene file), or positions = [[x, y, z], ...]
+
+    [output]                     # sim.output(...)
+    path = "run.h5"              # relative to the working directory
+    every = 0.01
+
+    [run]                        # sim.run(...)
+    until = 0.2
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..material import Material
+from ..scene_tools import lattice
+from ..simulation import Simulation
+
+_TOP = {"simulation", "materials", "contacts", "boundaries", "particles", "output", "run"}
+
+
+def load_scene(path: str | Path) -> tuple[Simulation, dict[str, Any]]:
+    """Build the Simulation a TOML scene describes; return it and the ``[run]`` arguments."""
+    path = Path(path)
+    try:
+        doc = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"{path}: not valid TOML: {exc}") from None
+    unknown = sorted(set(doc) - _TOP)
+    if unknown:
+        raise ParameterError(f"{path}: unknown table(s) {unknown}; allowed: {sorted(_TOP)}")
+    if "simulation" not in doc:
+        raise ParameterError(f"{path}: the [simulation] table (with dt) is required")
+    sim = Simulation(**doc["simulation"])
+    mats: dict[str, Material] = {}
+    for name, kw in doc.get("materials", {}).items():
+        mats[name] = Material(name, **kw)
+
+    def mat(where: str, name: Any) -> Material:
+        if name not in mats:
+            raise ParameterError(f"{path}: {where}: material={name!r} is not defined; "
+                                 f"defined: {', '.join(mats) or 'none'}")
+        return mats[name]
+
+    for k, c in enumerate(doc.get("contacts", [])):
+        c = dict(c)
+        pair = c.pop("materials", None)
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise ParameterError(f"{path}: contacts[{k}]: materials must be a list of two names")
+        sim.contact(mat(f"contacts[{k}]", pair[0]), mat(f"contacts[{k}]", pair[1]), **c)
+    for k, b in enumerate(doc.get("boundaries", [])):
+        b = dict(b)
+        kind = b.pop("kind", None)
+        m = mat(f"boundaries[{k}]", b.pop("material", None))
+        sim.add_boundary(kind, material=m, **b)
+    for k, p in enumerate(doc.get("particles", [])):
+        p = dict(p)
+        shape = p.pop("shape", "sphere")
+        m = mat(f"particles[{k}]", p.pop("material", None))
+        sources = [s for s in ("csv", "lattice", "positions") if s in p]
+        if len(sources) != 1:
+            raise ParameterError(f"{path}: particles[{k}]: give exactly one of csv, lattice, "
+                                 f"positions (got {sources or 'none'})")
+        if "csv" in p:
+            data = np.atleast_2d(np.loadtxt(path.parent / p.pop("csv"), delimiter=",",
+                                            skiprows=1))
+            p["positions"] = data[:, :3]
+            if data.shape[1] >= 6 and "velocities" not in p:
+                p["velocities"] = data[:, 3:6]
+            if data.shape[1] >= 7 and shape == "sphere" and "radius" not in p:
+                p["radius"] = data[:, 6]
+        elif "lattice" in p:
+            p["positions"] = lattice(**p.pop("lattice"))
+        sim.add_particles(shape, material=m, **p)
+    if "output" in doc:
+        out = dict(doc["output"])
+        # inputs (csv) are relative to the scene file, the output to the working directory
+        sim.output(str(out.pop("path", path.with_suffix(".h5").name)), **out)
+    return sim, dict(doc.get("run", {}))
