@@ -23,7 +23,6 @@ import tempfile
 import time
 from pathlib import Path
 
-
 HERE = Path(__file__).resolve().parent
 SCENE = HERE / "scenes" / "box_settle"
 RESULTS = HERE / "results"

@@ -29,9 +29,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     n = len(sim.bodies)
     print(f"{sim.step_count} steps, t = {sim.time:.6g} s, {n} particles, {wall:.1f} s wall "
           f"({n * sim.step_count / max(wall, 1e-9):.3g} particle-steps/s incl. compile)")
-    if sim._writer is not None:
-        print(f"output: {sim._writer.path} ({sim._writer.frames} frames) + "
-              f"{sim._writer.path.with_suffix('.xdmf').name}")
+    w = sim.last_output
+    if w is not None:
+        print(f"output: {w.path} ({w.frames} frames) + {w.path.with_suffix('.xdmf').name}")
     return 0
 
 

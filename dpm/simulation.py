@@ -99,6 +99,9 @@ class Simulation:
         self._prepared = False
         self._forces_valid = False
         self._writer = None
+        #: the Writer of the latest output file (open or closed): .path, .frames
+        self.last_output = None
+        self._output_path: str | None = None
         self._output_every: int | None = None
         self._diag = np.zeros(8)
         self._module = None
@@ -204,9 +207,8 @@ class Simulation:
     def output(self, path: str, every: float | None = None,
                every_steps: int | None = None) -> None:
         """Write frames to HDF5 at ``path`` (+ XDMF beside it) every ``every`` seconds or
-        ``every_steps`` steps; the current state is written as the first frame."""
-        from .io.hdf5 import Writer
-
+        ``every_steps`` steps. The file is created when the next run starts, with the state
+        at that moment as its first frame."""
         if (every is None) == (every_steps is None):
             raise ParameterError("sim.output(): give exactly one of every (s) or every_steps")
         if every is not None:
@@ -215,16 +217,18 @@ class Simulation:
             every_steps = max(1, round(every / self.dt))
         validate("sim.output()", {"every_steps": Parameter(low=1, kind="float")},
                  {"every_steps": every_steps})
-        if self._writer is not None:
-            self._writer.close()
-        self._writer = Writer(path, self)
+        self.close()
+        self._writer = None
+        self._output_path = str(path)
         self._output_every = int(every_steps)
-        self._frame_pending = True
 
     def close(self) -> None:
-        """Close the output file (also done at the end of :meth:`run`)."""
+        """Close the output file; a later run appends to a new file only after a new
+        :meth:`output` call."""
         if self._writer is not None:
             self._writer.close()
+            self._output_path = None
+            self._writer = None
 
     # ----------------------------------------------------------------- checks
     def time_step_report(self) -> TimeStepReport:
@@ -447,7 +451,11 @@ class Simulation:
         per_step_hooks = bool(hooks.dpm_before_step.get_hookimpls()
                               or hooks.dpm_after_step.get_hookimpls())
         bar = Progress(nsteps, self.dt, self.time, enabled=progress)
-        if self._writer is not None and getattr(self, "_frame_pending", False):
+        if self._output_path is not None and self._writer is None:
+            from .io.hdf5 import Writer
+
+            self._writer = Writer(self._output_path, self)
+            self.last_output = self._writer
             self._write_frame()
         done = 0
         chunk = 10
@@ -522,14 +530,14 @@ class Simulation:
         hint = ""
         if rep is not None and rep.contact_time is not None:
             hint = (f"; shortest contact {rep.contact_time:.3g} s = "
-                    f"{rep.steps_per_contact:.1f} steps")
+                    f"{rep.steps_per_contact:.3g} steps")
         if rep is not None and rep.rayleigh is not None:
             hint += f"; Rayleigh step {rep.rayleigh:.3g} s"
         written = ""
-        if self._writer is not None:
-            self._writer.flush()
-            written = (f"; {self._writer.frames} frame(s) written to {self._writer.path} "
-                       "stay readable")
+        w = self._writer
+        if w is not None:
+            w.flush()
+            written = f"; {w.frames} frame(s) written to {w.path} stay readable"
         self.close()
         raise UnstableRunError(
             f"unstable run at step {self.step_count} (t = {self.time:.6g} s): {what}. "
@@ -548,7 +556,6 @@ class Simulation:
             bd.force = bd.force + w.force[k]
 
     def _write_frame(self) -> None:
-        self._frame_pending = False
         self._writer.write(self)
         self._registry.manager.hook.dpm_on_output(sim=self, frame=self._writer.frames - 1,
                                                   path=self._writer.path)

@@ -6,8 +6,9 @@ from dataclasses import dataclass
 
 #: fewer steps per contact than this is refused (explicit schemes go unstable near 2/omega)
 MIN_STEPS_PER_CONTACT = 5.0
-#: fewer steps per contact than this gives a warning (restitution error above ~1 %)
-WARN_STEPS_PER_CONTACT = 20.0
+#: fewer steps per contact than this gives a warning (errors of several per cent in the
+#: restitution and the peak force)
+WARN_STEPS_PER_CONTACT = 10.0
 #: fraction of the Rayleigh step above which a warning is given / the run is refused
 WARN_RAYLEIGH_FRACTION = 0.3
 MAX_RAYLEIGH_FRACTION = 1.0
@@ -46,7 +47,7 @@ class TimeStepReport:
         if spc is not None:
             msg = (f"dt={self.dt:g} s resolves the shortest contact ({self.pair}, "
                    f"{self.contact_time:.3g} s at {self.impact_speed:.3g} m/s) with "
-                   f"{spc:.1f} steps")
+                   f"{spc:.3g} steps")
             if spc < MIN_STEPS_PER_CONTACT:
                 refuse.append(msg + f" (allowed: >= {MIN_STEPS_PER_CONTACT:g}; "
                               f"critical dt = {self.contact_time / MIN_STEPS_PER_CONTACT:.3g} s)")

@@ -1,0 +1,86 @@
+"""TOML scenes and the command line."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dpm
+from dpm.cli import main
+from dpm.io.scene import load_scene
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+SCENE = """
+[simulation]
+dt = 1e-5
+gravity = [0, 0, -9.81]
+
+[materials.glass]
+density = 2500
+young = 5e6
+poisson = 0.45
+
+[[contacts]]
+materials = ["glass", "glass"]
+model = "hertz_mindlin"
+restitution = 0.3
+
+[[boundaries]]
+kind = "plane"
+material = "glass"
+
+[[particles]]
+shape = "sphere"
+material = "glass"
+csv = "p.csv"
+
+[output]
+path = "{out}"
+every_steps = 10
+
+[run]
+steps = 50
+"""
+
+
+def test_scene_mirrors_the_api(tmp_path):
+    np.savetxt(tmp_path / "p.csv", [[0, 0, 2e-3, 0, 0, -0.1, 1e-3], [5e-3, 0, 2e-3, 0, 0, 0,
+                                                                      0.5e-3]],
+               delimiter=",", header="x,y,z,vx,vy,vz,r", comments="")
+    out = tmp_path / "out.h5"
+    (tmp_path / "s.toml").write_text(SCENE.format(out=out))
+    sim, run_kw = load_scene(tmp_path / "s.toml")  # opens no file before a run
+    assert run_kw == {"steps": 50}
+    np.testing.assert_array_equal(sim.bodies.radius, [1e-3, 0.5e-3])  # radii from the csv
+    np.testing.assert_array_equal(sim.bodies.velocity[0], [0, 0, -0.1])
+    assert main(["run", str(tmp_path / "s.toml"), "--no-progress"]) == 0
+    run = dpm.load(out)
+    assert run.n_frames == 6 and run.steps[-1] == 50
+
+
+def test_scene_errors_name_the_problem(tmp_path):
+    bad = SCENE.replace('material = "glass"\ncsv', 'material = "steel"\ncsv')
+    (tmp_path / "s.toml").write_text(bad.format(out=tmp_path / "o.h5"))
+    with pytest.raises(dpm.ParameterError, match="material='steel' is not defined"):
+        load_scene(tmp_path / "s.toml")
+    (tmp_path / "t.toml").write_text("[simulation]\ndt = -1\n")
+    with pytest.raises(dpm.ParameterError, match=r"dt=-1 is outside \(0, inf\)"):
+        load_scene(tmp_path / "t.toml")
+
+
+def test_cli_reports_errors_without_traceback(tmp_path):
+    (tmp_path / "t.toml").write_text("[simulation]\ndt = 1e-5\nintegrator = 'rk99'\n")
+    r = subprocess.run([sys.executable, "-m", "dpm.cli", "run", str(tmp_path / "t.toml")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2
+    assert "unknown integrator 'rk99'" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_example_scene_file_runs(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", str(EXAMPLES / "box_settle.toml"), "--steps", "200",
+                 "--no-progress"]) == 0
+    assert dpm.load(tmp_path / "box_settle_toml.h5").n_frames == 1
