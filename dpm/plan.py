@@ -2,10 +2,11 @@
 
 :func:`step_module` copies :mod:`dpm.kernels.step` with its ``bindings`` block rewritten so
 that the scene's contact laws become ``law_0 .. law_k`` and its integrator's
-``pre_force``/``post_force`` are imported. The file goes to the dpm cache directory under a
-name that carries a hash of every source it depends on: numba's on-disk cache of a kernel
-does not notice when a jitted function it calls in another file changes (numba #1833), so a
-changed law or kernel gives a new file name and a fresh compile instead of stale code.
+``pre_force_body``/``post_force_body`` are imported. The file goes to the dpm cache
+directory under a name that carries a hash of every source it depends on: numba's on-disk
+cache of a kernel does not notice when a jitted function it calls in another file changes
+(numba #1833), so a changed law or kernel gives a new file name and a fresh compile instead
+of stale code.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ def render(laws: list[tuple[str, str]], integrator_module: str) -> str:
     lines = [_BEGIN]
     for k, (mod, fn) in enumerate(laws):
         lines.append(f"from {mod} import {fn} as law_{k}")
-    lines.append(f"from {integrator_module} import pre_force, post_force")
+    lines.append(f"from {integrator_module} import pre_force_body, post_force_body")
     lines += ["", "", "@jit",
               "def pair_force(model, p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, "
               "dt, hist, k):",

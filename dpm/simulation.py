@@ -14,13 +14,18 @@ from . import plan as _plan
 from .boundaries.base import Boundary
 from .errors import ParameterError, SceneError, UnstableRunError
 from .impact.base import ImpactModel, PairContext
-from .kernels import neighbours
-from .kernels.step import STATUS_NAN, STATUS_OK, STATUS_OVERFLOW, STATUS_OVERLAP
+from .kernels.step import (
+    STATUS_NAN,
+    STATUS_OK,
+    STATUS_OVERFLOW,
+    STATUS_OVERLAP,
+    STATUS_WALL_OVERFLOW,
+)
 from .material import Material
 from .parameters import Parameter, validate
 from .plugins import registry
 from .shapes.base import Shape
-from .state import Bodies, Contacts, Elements, Walls
+from .state import Bodies, Contacts, Elements, WallContacts, Walls
 from .timestep import TimeStepReport
 
 DT_CHECKS = ("refuse", "warn", "off")
@@ -91,6 +96,7 @@ class Simulation:
         self.bodies = Bodies()
         self.elements = Elements()
         self.contacts = Contacts()
+        self.wall_contacts = WallContacts()
         self.walls: Walls | None = None
         self.time = 0.0
         self.step_count = 0
@@ -197,6 +203,9 @@ class Simulation:
             inertia=batch.inertia, invmass=1.0 / batch.mass, invinertia=1.0 / batch.inertia,
             radius=batch.bounding_radius, material=np.full(n, imat),
             shape=np.zeros(n, np.int64))
+        b = self.bodies
+        b.element_start = np.concatenate(
+            [b.element_start, b.element_start[-1] + np.cumsum(batch.element_count)])
         owner = np.repeat(np.arange(first, first + n), batch.element_count)
         self.elements.append(owner, batch.element_offset, batch.element_radius,
                              np.full(len(owner), imat))
@@ -332,7 +341,7 @@ class Simulation:
         if pairs == 0:
             return
         i = np.repeat(np.arange(len(e)), np.diff(self.contacts.start))
-        j = self.contacts.j[:pairs]
+        j = self.contacts.key[:pairs]
         d = np.linalg.norm(e.position[i] - e.position[j], axis=1)
         ratio = (e.radius[i] + e.radius[j] - d) / np.minimum(e.radius[i], e.radius[j])
         k = int(np.argmax(ratio))
@@ -378,48 +387,70 @@ class Simulation:
             owners += [k] * len(p)
         n_el = len(self.elements)
         self.walls = Walls(np.concatenate(pts) if pts else np.zeros((0, 3)),
-                           np.concatenate(nrm) if nrm else np.zeros((0, 3)), mats, owners, n_el)
+                           np.concatenate(nrm) if nrm else np.zeros((0, 3)), mats, owners)
         if self.skin is None:
             self.skin = 0.4 * float(self.elements.radius.min())
-        self._has_offsets = bool(np.any(self.elements.offset != 0.0))
+        e, b = self.elements, self.bodies
+        # every body one sphere at its centre: the element positions are the body positions
+        self._spheres_only = bool(len(e) == len(b) and np.all(e.offset == 0.0)
+                                  and np.array_equal(e.owner, np.arange(len(b))))
+        if self._spheres_only:
+            e.position = b.position
         if len(self.contacts.start) != n_el + 1:
-            self.contacts.reset(n_el, 16 * n_el)
-        self._module.update_element_positions(
-            self.bodies.position, self.bodies.orientation, self.elements.owner,
-            self.elements.offset, self.elements.position, self._has_offsets)
+            self.contacts.reset(n_el, 8 * n_el)
+            self.wall_contacts.reset(n_el, n_el)
+        self._e_worst = np.zeros(n_el)
+        self._e_count = np.zeros(n_el, np.int64)
+        if not self._spheres_only:
+            self._module.update_element_positions(b.position, b.orientation, b.element_start,
+                                                  e.offset, e.position)
         self._rebuild()
         self._check_initial_overlaps()
         self._prepared = True
 
     def _rebuild(self) -> None:
-        e, c = self.elements, self.contacts
+        e, c, wc, w = self.elements, self.contacts, self.wall_contacts, self.walls
+        d = self._diag
         while True:
-            need = neighbours.build_neighbour_list(e.position, e.radius, e.owner, self.skin,
-                                                   c.start, c.j, c.history, c.new_start,
-                                                   c.new_j, c.new_history)
-            if need <= c.capacity:
+            d[0] = STATUS_OK
+            self._module.rebuild(self.skin, e.owner, e.radius, e.position, e.reference,
+                                 c.start, c.key, c.history, c.active, c.new_start, c.new_key,
+                                 c.new_history, c.new_active, c.t_start, c.t_pair, wc.start,
+                                 wc.key, wc.history, wc.active, wc.new_start, wc.new_key,
+                                 wc.new_history, wc.new_active, w.point, w.normal, d)
+            if d[0] == STATUS_OVERFLOW:
+                c.grow(int(d[3]))
+            elif d[0] == STATUS_WALL_OVERFLOW:
+                wc.grow(int(d[3]))
+            else:
                 break
-            c.grow(need)
-        e.reference[:] = e.position
-        self.rebuild_count += 1
+        self.rebuild_count += int(d[2])
+        d[2] = 0
 
     def _args(self) -> tuple:
-        b, e, c, w = self.bodies, self.elements, self.contacts, self.walls
-        return (self.gravity, self.skin, self.max_overlap, b.position, b.velocity,
-                b.orientation, b.angular_velocity, b.force, b.torque, b.mass, b.invmass,
-                b.invinertia, e.owner, e.offset, e.radius, e.material, e.position, e.reference,
-                self._has_offsets, c.start, c.j, c.history, c.new_start, c.new_j,
-                c.new_history, w.point, w.normal, w.velocity, w.material, w.force, w.history,
-                self._pair_model, self._pair_params, self._diag)
+        """Arguments of ``run_steps``/``finish_step`` after ``dt`` (see kernels/step.py)."""
+        b, e, c, wc, w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
+        return (self.gravity, self.skin, self.max_overlap, not self._spheres_only,
+                b.position, b.velocity, b.orientation, b.angular_velocity, b.force, b.torque,
+                b.mass, b.invmass, b.invinertia, b.element_start, e.owner, e.offset, e.radius,
+                e.material, e.position, e.reference, c.start, c.key, c.history, c.active,
+                c.force, c.new_start, c.new_key, c.new_history, c.new_active, c.t_start,
+                c.t_pair, wc.start, wc.key, wc.history, wc.active, wc.force, wc.new_start,
+                wc.new_key, wc.new_history, wc.new_active, w.point, w.normal, w.velocity,
+                w.material, w.force, self._pair_model, self._pair_params, self._e_worst,
+                self._e_count, self._diag)
 
     def _prime_forces(self) -> None:
         """Forces of the current state without advancing contact history (dt = 0)."""
-        b, e, c, w = self.bodies, self.elements, self.contacts, self.walls
+        b, e, c, wc, w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
         self._module.compute_forces(
-            0.0, self.gravity, b.position, b.velocity, b.angular_velocity, b.force, b.torque,
-            b.mass, b.invmass, e.owner, e.radius, e.material, e.position, c.start, c.j,
-            c.history, w.point, w.normal, w.velocity, w.material, w.force, w.history,
-            self._pair_model, self._pair_params, self._diag)
+            0.0, False, self.gravity, b.position, b.velocity, b.orientation, b.angular_velocity,
+            b.force, b.torque, b.mass, b.invmass, b.invinertia, b.element_start, e.owner,
+            e.radius, e.material, e.position,
+            c.start, c.key, c.history, c.active, c.force, c.t_start, c.t_pair, wc.start,
+            wc.key, wc.history, wc.active, wc.force, w.point, w.normal, w.velocity,
+            w.material, w.force, self._pair_model, self._pair_params, self._e_worst,
+            self._e_count, self._diag)
         self._forces_valid = True
 
     # ----------------------------------------------------------------- running
@@ -492,10 +523,13 @@ class Simulation:
         while total < n:
             self._module.run_steps(n - total, self.dt, *self._args())
             ran = int(d[1])
-            if d[0] == STATUS_OVERFLOW:  # stopped after pre_force: grow, finish that step
-                self.contacts.grow(int(d[3]))
-                d[0] = STATUS_OK
-                self._module.finish_step(self.dt, *self._args())
+            if d[0] in (STATUS_OVERFLOW, STATUS_WALL_OVERFLOW):
+                # stopped after begin_step: grow, then finish that step
+                while d[0] in (STATUS_OVERFLOW, STATUS_WALL_OVERFLOW):
+                    (self.contacts if d[0] == STATUS_OVERFLOW else self.wall_contacts).grow(
+                        int(d[3]))
+                    d[0] = STATUS_OK
+                    self._module.finish_step(self.dt, *self._args())
                 if d[0] in (STATUS_OK, STATUS_OVERLAP):
                     ran += 1
             total += ran

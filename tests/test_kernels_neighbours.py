@@ -12,9 +12,11 @@ def _build(pos, rad, owner, skin, cap=10000, old=None):
     start = np.zeros(n + 1, np.int64) if old is None else old[0]
     j = np.zeros(cap, np.int64) if old is None else old[1]
     hist = np.zeros((cap, N_HISTORY)) if old is None else old[2]
-    new_start = np.zeros(n + 1, np.int64)
-    count = neighbours.build_neighbour_list(pos, rad, owner, skin, start, j, hist, new_start,
-                                            np.zeros(cap, np.int64), np.zeros((cap, N_HISTORY)))
+    active = np.zeros(cap, np.uint8)
+    count = neighbours.build_neighbour_list(
+        pos, rad, owner, skin, start, j, hist, active, np.zeros(n + 1, np.int64),
+        np.zeros(cap, np.int64), np.zeros((cap, N_HISTORY)), np.zeros(cap, np.uint8),
+        np.zeros(n + 1, np.int64), np.zeros(cap, np.int64))
     return count, start, j, hist
 
 
@@ -77,10 +79,31 @@ def test_history_follows_pairs_across_rebuild():
     assert kept > 50 and fresh > 0
 
 
-def test_max_displacement_flags_nan():
-    a = np.zeros((3, 3))
-    b = np.zeros((3, 3))
-    b[1, 2] = 0.5
-    assert neighbours.max_displacement_sq(b, a) == pytest.approx(0.25)
-    b[2, 0] = np.nan
-    assert np.isnan(neighbours.max_displacement_sq(b, a))
+def test_transpose_lists_second_elements():
+    rng = np.random.default_rng(9)
+    pos = rng.uniform(0, 0.02, (150, 3))
+    rad = np.full(150, 1e-3)
+    count, start, j, _ = _build(pos, rad, np.arange(150), 5e-4)
+    t_start = np.zeros(151, np.int64)
+    t_pair = np.zeros(count, np.int64)
+    neighbours.build_transpose(start, j, t_start, t_pair)
+    for e in range(150):
+        ks = t_pair[t_start[e]:t_start[e + 1]]
+        assert np.all(j[ks] == e) and np.all(np.diff(ks) > 0)
+    assert t_start[-1] == count
+
+
+def test_wall_list_finds_planes_within_skin():
+    pos = np.array([[0.5e-3, 5e-3, 5e-3], [5e-3, 5e-3, 5e-3], [1.2e-3, 9.5e-3, 5e-3]])
+    rad = np.full(3, 1e-3)
+    pts = np.array([[0, 0, 0], [0, 0.01, 0]], float)
+    nrm = np.array([[1, 0, 0], [0, -1, 0]], float)
+    n, cap = 3, 16
+    start = np.zeros(n + 1, np.int64)
+    key = np.zeros(cap, np.int64)
+    args = (start, key, np.zeros((cap, N_HISTORY)), np.zeros(cap, np.uint8),
+            np.zeros(n + 1, np.int64), np.zeros(cap, np.int64), np.zeros((cap, N_HISTORY)),
+            np.zeros(cap, np.uint8))
+    count = neighbours.build_wall_list(pos, rad, 0.5e-3, pts, nrm, *args)
+    assert count == 3
+    assert list(start) == [0, 1, 1, 3] and list(key[:3]) == [0, 0, 1]

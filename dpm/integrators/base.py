@@ -1,4 +1,4 @@
-"""Integrators: each names the kernel module holding its ``pre_force``/``post_force``."""
+"""Integrators: each names the kernel module holding its per-body step functions."""
 
 from __future__ import annotations
 
@@ -9,9 +9,10 @@ class Integrator:
     """A time integrator.
 
     Subclass it and set ``kernel_module`` to a module defining two numba functions
-    ``pre_force(pos, vel, quat, angvel, force, torque, invmass, invinertia, dt)`` and
-    ``post_force(...)`` (same arguments), run before and after the force evaluation of
-    each step. ``order`` is the global order of accuracy for smooth forces.
+    ``pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt)``
+    and ``post_force_body(...)`` (same arguments) that advance body ``i``; the step calls
+    them inside its parallel loops over bodies, before and after the force evaluation.
+    ``order`` is the global order of accuracy for smooth forces.
     """
 
     name: ClassVar[str] = ""

@@ -5,28 +5,30 @@
 
 All work happens after the force evaluation. Rotation in the world frame with a scalar
 moment of inertia (spheres).
-"""
 
+An integrator module gives two per-body functions that the step calls inside its own
+parallel loops over bodies: ``pre_force_body`` (before the forces of the step) and
+``post_force_body`` (after them).
+"""
 
 from .config import jit
 from .quaternion import rotate_by_angular_velocity
 
 
 @jit
-def pre_force(pos, vel, quat, angvel, force, torque, invmass, invinertia, dt):
+def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt):
     """Nothing to do before the forces."""
     return
 
 
 @jit
-def post_force(pos, vel, quat, angvel, force, torque, invmass, invinertia, dt):
+def post_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt):
     """Kick then drift with the new velocity."""
-    for i in range(pos.shape[0]):
-        im = invmass[i]
-        for d in range(3):
-            vel[i, d] += dt * force[i, d] * im
-            pos[i, d] += dt * vel[i, d]
-        ii = invinertia[i, 0]
-        for d in range(3):
-            angvel[i, d] += dt * torque[i, d] * ii
-        rotate_by_angular_velocity(quat, i, angvel[i, 0], angvel[i, 1], angvel[i, 2], dt)
+    im = invmass[i]
+    for d in range(3):
+        vel[i, d] += dt * force[i, d] * im
+        pos[i, d] += dt * vel[i, d]
+    ii = invinertia[i, 0]
+    for d in range(3):
+        angvel[i, d] += dt * torque[i, d] * ii
+    rotate_by_angular_velocity(quat, i, angvel[i, 0], angvel[i, 1], angvel[i, 2], dt)

@@ -1,35 +1,47 @@
-"""Linked-cell binning and a Verlet neighbour list with a skin; contact history merge.
+"""Linked-cell binning, Verlet neighbour lists with a skin, contact history merge.
 
-The list is a half list in CSR form: for element i, ``nl_j[nl_start[i]:nl_start[i+1]]``
+Element pairs: a half list in CSR form. For element i, ``nl_j[nl_start[i]:nl_start[i+1]]``
 holds the elements j > i (sorted) within r_i + r_j + skin, excluding elements of the same
-body. Each entry owns a row of contact history, so a rebuild merges the old rows into the
-new list by walking both sorted lists (no hashing). The list stays valid while no element
-moved more than skin/2 since the rebuild (:func:`max_displacement_sq`).
+body. Each entry owns a row of contact history and an ``active`` flag (touching at the last
+force evaluation), so a rebuild carries both to the new list by walking the old and new
+sorted lists (no hashing). A transposed index (``t_start``, ``t_pair``) lists for every
+element j the pairs where it is the second element, for the race-free force sum.
+
+Element-plane contacts: the same CSR form keyed by (element, plane), for planes within
+r + skin of the element's centre.
+
+Both lists stay valid while no element moved more than skin/2 since the rebuild
+(:func:`max_displacement_sq`). The pair search runs in parallel in two passes (count,
+then fill), so the lists are identical for any number of threads.
 """
 
 import math
 
 import numpy as np
+from numba import prange
 
-from .config import jit
+from .config import jit, pjit
 
 #: at most this many cells per element (a sparse scene gets coarser cells)
 CELLS_PER_ELEMENT = 2
 
 
-@jit
+@pjit
 def max_displacement_sq(e_pos, e_ref):
     """Largest squared displacement since the last rebuild; NaN if any position is NaN."""
-    m = 0.0
-    for i in range(e_pos.shape[0]):
+    n = e_pos.shape[0]
+    d2 = np.empty(n)
+    for i in prange(n):
         dx = e_pos[i, 0] - e_ref[i, 0]
         dy = e_pos[i, 1] - e_ref[i, 1]
         dz = e_pos[i, 2] - e_ref[i, 2]
-        d2 = dx * dx + dy * dy + dz * dz
-        if not d2 <= m:  # true for a larger value and for NaN
-            if d2 != d2:
-                return d2
-            m = d2
+        d2[i] = dx * dx + dy * dy + dz * dz
+    m = 0.0
+    for i in range(n):
+        if not d2[i] <= m:  # true for a larger value and for NaN
+            if d2[i] != d2[i]:
+                return d2[i]
+            m = d2[i]
     return m
 
 
@@ -96,24 +108,12 @@ def bin_elements(e_pos, cell_size):
     return lo, width, dims, cell_start, order
 
 
-@jit
-def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist,
-                         new_start, new_j, new_hist):
-    """Rebuild the half list into ``new_*`` and merge history from ``nl_*``; copy back.
-
-    Returns the number of pairs found. If it exceeds ``new_j.size`` nothing is copied back
-    (the old list and its history are intact): the caller grows the buffers and calls again.
-    """
+@pjit
+def _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, counts,
+            out_start, out_j, fill):
+    """Pass 1 (fill=False): counts[i] = partners j > i. Pass 2: write them sorted."""
     n = e_pos.shape[0]
-    cap = new_j.shape[0]
-    rmax = 0.0
-    for i in range(n):
-        if e_radius[i] > rmax:
-            rmax = e_radius[i]
-    lo, width, dims, cell_start, order = bin_elements(e_pos, 2.0 * rmax + skin)
-    count = 0
-    new_start[0] = 0
-    for i in range(n):
+    for i in prange(n):
         xi = e_pos[i, 0]
         yi = e_pos[i, 1]
         zi = e_pos[i, 2]
@@ -122,7 +122,8 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
         cx = min(max(int((xi - lo[0]) / width[0]), 0), dims[0] - 1)
         cy = min(max(int((yi - lo[1]) / width[1]), 0), dims[1] - 1)
         cz = min(max(int((zi - lo[2]) / width[2]), 0), dims[2] - 1)
-        first = count
+        first = out_start[i] if fill else 0
+        count = first
         for gz in range(max(cz - 1, 0), min(cz + 2, dims[2])):
             for gy in range(max(cy - 1, 0), min(cy + 2, dims[1])):
                 for gx in range(max(cx - 1, 0), min(cx + 2, dims[0])):
@@ -136,45 +137,145 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
                         dz = zi - e_pos[j, 2]
                         cut = ri + e_radius[j]
                         if dx * dx + dy * dy + dz * dz < cut * cut:
-                            if count < cap:
-                                # insertion into the sorted segment of i
+                            if fill:  # insertion into the sorted segment of i
                                 k = count
-                                while k > first and new_j[k - 1] > j:
-                                    new_j[k] = new_j[k - 1]
+                                while k > first and out_j[k - 1] > j:
+                                    out_j[k] = out_j[k - 1]
                                     k -= 1
-                                new_j[k] = j
+                                out_j[k] = j
                             count += 1
-        new_start[i + 1] = count
-    if count > cap:
-        return count
-    merge_history(nl_start, nl_j, nl_hist, new_start, new_j, new_hist, n)
-    for i in range(n + 1):
-        nl_start[i] = new_start[i]
-    h = nl_hist.shape[1]
-    for k in range(count):
-        nl_j[k] = new_j[k]
-        for c in range(h):
-            nl_hist[k, c] = new_hist[k, c]
-    return count
+        if not fill:
+            counts[i] = count
 
 
-@jit
-def merge_history(old_start, old_j, old_hist, new_start, new_j, new_hist, n):
-    """Carry each pair's history rows from the old sorted list to the new one."""
+@pjit
+def _merge(old_start, old_key, old_hist, old_active, new_start, new_key, new_hist,
+           new_active):
+    """Carry history rows and active flags from the old sorted list to the new one."""
+    n = new_start.shape[0] - 1
     h = old_hist.shape[1]
-    for i in range(n):
+    for i in prange(n):
         a = old_start[i]
         a_end = old_start[i + 1]
         for k in range(new_start[i], new_start[i + 1]):
-            j = new_j[k]
-            while a < a_end and old_j[a] < j:
+            key = new_key[k]
+            while a < a_end and old_key[a] < key:
                 a += 1
-            if a < a_end and old_j[a] == j:
+            if a < a_end and old_key[a] == key:
                 for c in range(h):
                     new_hist[k, c] = old_hist[a, c]
+                new_active[k] = old_active[a]
             else:
                 for c in range(h):
                     new_hist[k, c] = 0.0
+                new_active[k] = 0
+
+
+@pjit
+def _copy_back(count, new_start, new_key, new_hist, new_active, start, key, hist, active):
+    n = new_start.shape[0]
+    for i in prange(n):
+        start[i] = new_start[i]
+    h = hist.shape[1]
+    for k in prange(count):
+        key[k] = new_key[k]
+        active[k] = new_active[k]
+        for c in range(h):
+            hist[k, c] = new_hist[k, c]
+
+
+@jit
+def build_transpose(nl_start, nl_j, t_start, t_pair):
+    """t_pair[t_start[j]:t_start[j+1]] = the pairs (in increasing order) whose second
+    element is j."""
+    n = nl_start.shape[0] - 1
+    for j in range(n + 1):
+        t_start[j] = 0
+    npairs = nl_start[n]
+    for k in range(npairs):
+        t_start[nl_j[k] + 1] += 1
+    for j in range(n):
+        t_start[j + 1] += t_start[j]
+    fill = t_start[:-1].copy()
+    for k in range(npairs):
+        j = nl_j[k]
+        t_pair[fill[j]] = k
+        fill[j] += 1
+
+
+@jit
+def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist, nl_active,
+                         new_start, new_j, new_hist, new_active, t_start, t_pair):
+    """Rebuild the half list, merge history and flags, copy back, build the transpose.
+
+    Returns the number of pairs found. If it exceeds the capacity nothing is changed (the
+    old list and its history are intact): the caller grows the buffers and calls again.
+    """
+    n = e_pos.shape[0]
+    cap = new_j.shape[0]
+    rmax = 0.0
+    for i in range(n):
+        if e_radius[i] > rmax:
+            rmax = e_radius[i]
+    lo, width, dims, cell_start, order = bin_elements(e_pos, 2.0 * rmax + skin)
+    counts = np.zeros(n, np.int64)
+    _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, counts,
+            new_start, new_j, False)
+    new_start[0] = 0
+    for i in range(n):
+        new_start[i + 1] = new_start[i] + counts[i]
+    count = new_start[n]
+    if count > cap:
+        return count
+    _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, counts,
+            new_start, new_j, True)
+    _merge(nl_start, nl_j, nl_hist, nl_active, new_start, new_j, new_hist, new_active)
+    _copy_back(count, new_start, new_j, new_hist, new_active, nl_start, nl_j, nl_hist,
+               nl_active)
+    build_transpose(nl_start, nl_j, t_start, t_pair)
+    return count
+
+
+@pjit
+def _wall_search(e_pos, e_radius, skin, w_point, w_normal, counts, out_start, out_w, fill):
+    n = e_pos.shape[0]
+    nw = w_point.shape[0]
+    for i in prange(n):
+        k = out_start[i] if fill else 0
+        for w in range(nw):
+            dist = ((e_pos[i, 0] - w_point[w, 0]) * w_normal[w, 0]
+                    + (e_pos[i, 1] - w_point[w, 1]) * w_normal[w, 1]
+                    + (e_pos[i, 2] - w_point[w, 2]) * w_normal[w, 2])
+            r = e_radius[i]
+            if dist < r + skin and dist > -r - skin:
+                if fill:
+                    out_w[k] = w
+                k += 1
+        if not fill:
+            counts[i] = k
+
+
+@jit
+def build_wall_list(e_pos, e_radius, skin, w_point, w_normal, wl_start, wl_w, wl_hist,
+                    wl_active, new_start, new_w, new_hist, new_active):
+    """Rebuild the element-plane list (planes within r + skin), merging history.
+
+    Returns the number of entries; above the capacity nothing is changed.
+    """
+    n = e_pos.shape[0]
+    counts = np.zeros(n, np.int64)
+    _wall_search(e_pos, e_radius, skin, w_point, w_normal, counts, new_start, new_w, False)
+    new_start[0] = 0
+    for i in range(n):
+        new_start[i + 1] = new_start[i] + counts[i]
+    count = new_start[n]
+    if count > new_w.shape[0]:
+        return count
+    _wall_search(e_pos, e_radius, skin, w_point, w_normal, counts, new_start, new_w, True)
+    _merge(wl_start, wl_w, wl_hist, wl_active, new_start, new_w, new_hist, new_active)
+    _copy_back(count, new_start, new_w, new_hist, new_active, wl_start, wl_w, wl_hist,
+               wl_active)
+    return count
 
 
 @jit

@@ -2,34 +2,44 @@
 
 Order of a step (:func:`run_steps`):
 
-1. ``pre_force``   integrator part before the forces (e.g. half kick + drift)
-2. element world positions from body position and quaternion
-3. neighbour list rebuilt when an element moved more than skin/2 (history merged)
-4. forces: gravity, element-element contacts (half list), element-plane contacts,
-   rolling resistance; force and torque summed on the owner bodies, reaction on planes
-5. ``post_force``  integrator part after the forces (e.g. second half kick)
+1. ``pre_force_body``  integrator part before the forces (e.g. half kick + drift)
+2. element world positions from body position and quaternion (skipped when every body is
+   one sphere: the element positions are then the body positions)
+3. neighbour lists rebuilt when an element moved more than skin/2 (history merged)
+4. forces, in two passes so that no two threads write the same row and the sums do not
+   depend on the number of threads:
+   a. per element (parallel): each pair of its half list and each plane of its wall list;
+      the force and both torques of a touching pair go to that pair's row of ``nl_f``
+   b. per body (parallel): gravity plus the rows of its elements' pairs, in a fixed order
+      (pairs where the element is first, then the transposed pairs, then planes)
+   c. plane reactions summed over the wall list
+5. ``post_force_body`` integrator part after the forces (e.g. second half kick), fused
+   into the loop of pass b
 
 :mod:`dpm.plan` copies this module for each scene with the block between the
 ``bindings`` markers rewritten: the contact laws the scene uses become ``law_0``,
-``law_1``, ... and the integrator's ``pre_force``/``post_force`` are imported, so each
+``law_1``, ... and the integrator's ``pre_force_body``/``post_force_body`` are imported, so each
 scene compiles (once, cached) a step that contains only what it needs.
 
-Diagnostics (``diag``): [0] status (0 ok, 1 neighbour list overflow, 2 NaN, 3 overlap
-beyond the limit), [1] steps done, [2] rebuilds, [3] pairs needed, [4] largest overlap /
-radius seen, [5] element with that overlap, [6] active contacts in the last force evaluation.
+Diagnostics (``diag``): [0] status (0 ok, 1 pair list overflow, 2 NaN, 3 overlap
+beyond the limit, 4 wall list overflow), [1] steps done, [2] rebuilds, [3] pairs needed,
+[4] largest overlap / radius seen, [5] element with that overlap, [6] active contacts in
+the last force evaluation.
 """
 # ruff: noqa: I001  (the bindings block must stay between its markers)
 import math
 
-from .config import jit
-from .neighbours import build_neighbour_list, max_displacement_sq
+from numba import prange
+
+from .config import step_jit as jit, step_pjit as pjit
+from .neighbours import build_neighbour_list, build_wall_list
 from .quaternion import rotate_vector
 from .rolling import rolling_torque
 
 # --- bindings begin (dpm.plan rewrites this block) ---
 from .law_linear import linear_spring_dashpot as law_0
 from .law_hertz_mindlin import hertz_mindlin as law_1
-from .integrate_velocity_verlet import pre_force, post_force
+from .integrate_velocity_verlet import pre_force_body, post_force_body
 
 
 @jit
@@ -44,81 +54,104 @@ STATUS_OK = 0
 STATUS_OVERFLOW = 1
 STATUS_NAN = 2
 STATUS_OVERLAP = 3
+STATUS_WALL_OVERFLOW = 4
 
 
 @jit
-def update_element_positions(b_pos, b_quat, e_owner, e_offset, e_pos, has_offsets):
-    """x_e = X_b + R(q_b) offset_e (a copy of X_b for sphere-only scenes)."""
-    for e in range(e_pos.shape[0]):
-        b = e_owner[e]
-        if has_offsets:
-            ox, oy, oz = rotate_vector(b_quat, b, e_offset[e, 0], e_offset[e, 1], e_offset[e, 2])
-            e_pos[e, 0] = b_pos[b, 0] + ox
-            e_pos[e, 1] = b_pos[b, 1] + oy
-            e_pos[e, 2] = b_pos[b, 2] + oz
-        else:
-            e_pos[e, 0] = b_pos[b, 0]
-            e_pos[e, 1] = b_pos[b, 1]
-            e_pos[e, 2] = b_pos[b, 2]
+def place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos):
+    """x_e = X_b + R(q_b) offset_e for the elements of body b."""
+    for e in range(b_estart[b], b_estart[b + 1]):
+        ox, oy, oz = rotate_vector(b_quat, b, e_offset[e, 0], e_offset[e, 1], e_offset[e, 2])
+        e_pos[e, 0] = b_pos[b, 0] + ox
+        e_pos[e, 1] = b_pos[b, 1] + oy
+        e_pos[e, 2] = b_pos[b, 2] + oz
+
+
+@pjit
+def update_element_positions(b_pos, b_quat, b_estart, e_offset, e_pos):
+    """Element world positions of every body."""
+    for b in prange(b_pos.shape[0]):
+        place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos)
+
+
+@pjit
+def begin_step(dt, update_elements, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
+               b_invmass, b_invinertia, b_estart, e_offset, e_pos, e_ref, e_d2):
+    """Steps 1-2 per body: integrator pre-force part, element positions, and each element's
+    squared displacement since the last rebuild (e_d2)."""
+    for b in prange(b_pos.shape[0]):
+        pre_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
+                       b_invinertia, dt)
+        if update_elements:
+            place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos)
+        for e in range(b_estart[b], b_estart[b + 1]):
+            dx = e_pos[e, 0] - e_ref[e, 0]
+            dy = e_pos[e, 1] - e_ref[e, 1]
+            dz = e_pos[e, 2] - e_ref[e, 2]
+            e_d2[e] = dx * dx + dy * dy + dz * dz
 
 
 @jit
-def compute_forces(dt, gravity, b_pos, b_vel, b_angvel, b_force, b_torque, b_mass, b_invmass,
-                   e_owner, e_radius, e_mat, e_pos, nl_start, nl_j, nl_hist,
-                   w_point, w_normal, w_vel, w_mat, w_force, w_hist, pair_model, pair_params,
-                   diag):
-    """Gravity plus all contact forces; returns the largest overlap / radius.
+def largest(values):
+    """Largest value; NaN if any is NaN."""
+    m = 0.0
+    for i in range(values.shape[0]):
+        v = values[i]
+        if not v <= m:
+            if v != v:
+                return v
+            m = v
+    return m
 
-    ``dt`` only advances the tangential history (0 re-evaluates forces without doing so).
+
+@pjit
+def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radius, e_mat,
+                 e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, wl_start, wl_w, wl_hist,
+                 wl_active, wl_f, w_point, w_normal, w_vel, w_mat, pair_model, pair_params,
+                 e_worst, e_count):
+    """Pass a: contact forces of every pair and element-plane entry, stored per row.
+
+    nl_f[k] = (F on i, torque on body(i), torque on body(j)); wl_f[q] = (F, torque).
+    e_worst[i], e_count[i]: largest overlap / radius and number of touching contacts.
     """
-    nb = b_pos.shape[0]
-    for b in range(nb):
-        m = b_mass[b]
-        for d in range(3):
-            b_force[b, d] = m * gravity[d]
-            b_torque[b, d] = 0.0
-    for w in range(w_force.shape[0]):
-        for d in range(3):
-            w_force[w, d] = 0.0
-    worst = 0.0
-    worst_e = -1
-    active = 0
     ne = e_pos.shape[0]
     nh = nl_hist.shape[1]
-    # element-element contacts
-    for i in range(ne):
+    for i in prange(ne):
         xi = e_pos[i, 0]
         yi = e_pos[i, 1]
         zi = e_pos[i, 2]
         ri = e_radius[i]
         bi = e_owner[i]
         mi = e_mat[i]
+        worst = 0.0
+        count = 0
         for kk in range(nl_start[i], nl_start[i + 1]):
             j = nl_j[kk]
             dx = xi - e_pos[j, 0]
             dy = yi - e_pos[j, 1]
             dz = zi - e_pos[j, 2]
-            rs = ri + e_radius[j]
+            rj = e_radius[j]
+            rs = ri + rj
             d2 = dx * dx + dy * dy + dz * dz
-            if d2 >= rs * rs:
-                for c in range(nh):
-                    nl_hist[kk, c] = 0.0
-                continue
             bj = e_owner[j]
             ims = b_invmass[bi] + b_invmass[bj]
-            if ims == 0.0:
+            if d2 >= rs * rs or ims == 0.0:
+                if nl_active[kk]:
+                    for c in range(nh):
+                        nl_hist[kk, c] = 0.0
+                    nl_active[kk] = 0
                 continue
-            active += 1
+            nl_active[kk] = 1
+            count += 1
             dist = math.sqrt(d2)
-            nx = dx / dist
-            ny = dy / dist
-            nz = dz / dist
+            inv = 1.0 / dist
+            nx = dx * inv
+            ny = dy * inv
+            nz = dz * inv
             delta = rs - dist
-            rj = e_radius[j]
-            ratio = delta / min(ri, rj)
-            if ratio > worst:
-                worst = ratio
-                worst_e = i
+            rmin = min(ri, rj)
+            if delta > worst * rmin:
+                worst = delta / rmin
             # contact point: middle of the overlap, on the line of centres
             a = ri - 0.5 * delta
             cx = xi - a * nx
@@ -143,90 +176,182 @@ def compute_forces(dt, gravity, b_pos, b_vel, b_angvel, b_force, b_torque, b_mas
             vtz = vz - vn * nz
             mj = e_mat[j]
             p = pair_params[mi, mj]
+            reff = ri * rj / rs
+            meff = 1.0 / ims
             fn, ftx, fty, ftz = pair_force(pair_model[mi, mj], p, delta, -vn, vtx, vty, vtz,
-                                           nx, ny, nz, 1.0 / ims, ri * rj / rs, dt, nl_hist, kk)
+                                           nx, ny, nz, meff, reff, dt, nl_hist, kk)
             fx = fn * nx + ftx
             fy = fn * ny + fty
             fz = fn * nz + ftz
-            b_force[bi, 0] += fx
-            b_force[bi, 1] += fy
-            b_force[bi, 2] += fz
-            b_force[bj, 0] -= fx
-            b_force[bj, 1] -= fy
-            b_force[bj, 2] -= fz
-            b_torque[bi, 0] += aiy * fz - aiz * fy
-            b_torque[bi, 1] += aiz * fx - aix * fz
-            b_torque[bi, 2] += aix * fy - aiy * fx
-            b_torque[bj, 0] -= ajy * fz - ajz * fy
-            b_torque[bj, 1] -= ajz * fx - ajx * fz
-            b_torque[bj, 2] -= ajx * fy - ajy * fx
+            tix = aiy * fz - aiz * fy
+            tiy = aiz * fx - aix * fz
+            tiz = aix * fy - aiy * fx
+            tjx = -(ajy * fz - ajz * fy)
+            tjy = -(ajz * fx - ajx * fz)
+            tjz = -(ajx * fy - ajy * fx)
             if p[6] != 0.0:
-                tx, ty, tz = rolling_torque(p, fn, ri * rj / rs, 1.0 / ims,
+                rx, ry, rz = rolling_torque(p, fn, reff, meff,
                                             b_angvel[bi, 0] - b_angvel[bj, 0],
                                             b_angvel[bi, 1] - b_angvel[bj, 1],
                                             b_angvel[bi, 2] - b_angvel[bj, 2], dt, nl_hist, kk)
-                b_torque[bi, 0] += tx
-                b_torque[bi, 1] += ty
-                b_torque[bi, 2] += tz
-                b_torque[bj, 0] -= tx
-                b_torque[bj, 1] -= ty
-                b_torque[bj, 2] -= tz
-    # element-plane contacts (one-sided: the normal points into the domain)
-    nw = w_point.shape[0]
-    for e in range(ne):
-        r = e_radius[e]
-        b = e_owner[e]
-        for w in range(nw):
-            hk = e * nw + w
+                tix += rx
+                tiy += ry
+                tiz += rz
+                tjx -= rx
+                tjy -= ry
+                tjz -= rz
+            nl_f[kk, 0] = fx
+            nl_f[kk, 1] = fy
+            nl_f[kk, 2] = fz
+            nl_f[kk, 3] = tix
+            nl_f[kk, 4] = tiy
+            nl_f[kk, 5] = tiz
+            nl_f[kk, 6] = tjx
+            nl_f[kk, 7] = tjy
+            nl_f[kk, 8] = tjz
+        # element-plane contacts (one-sided: the normal points into the domain)
+        for q in range(wl_start[i], wl_start[i + 1]):
+            w = wl_w[q]
             nx = w_normal[w, 0]
             ny = w_normal[w, 1]
             nz = w_normal[w, 2]
-            dist = ((e_pos[e, 0] - w_point[w, 0]) * nx + (e_pos[e, 1] - w_point[w, 1]) * ny
-                    + (e_pos[e, 2] - w_point[w, 2]) * nz)
-            delta = r - dist
-            if delta <= 0.0 or dist <= -r or b_invmass[b] == 0.0:
-                for c in range(nh):
-                    w_hist[hk, c] = 0.0
+            dist = ((xi - w_point[w, 0]) * nx + (yi - w_point[w, 1]) * ny
+                    + (zi - w_point[w, 2]) * nz)
+            delta = ri - dist
+            if delta <= 0.0 or dist <= -ri or b_invmass[bi] == 0.0:
+                if wl_active[q]:
+                    for c in range(nh):
+                        wl_hist[q, c] = 0.0
+                    wl_active[q] = 0
                 continue
-            active += 1
-            ratio = delta / r
-            if ratio > worst:
-                worst = ratio
-                worst_e = e
-            a = r - 0.5 * delta
-            ax = e_pos[e, 0] - a * nx - b_pos[b, 0]
-            ay = e_pos[e, 1] - a * ny - b_pos[b, 1]
-            az = e_pos[e, 2] - a * nz - b_pos[b, 2]
-            vx = b_vel[b, 0] + b_angvel[b, 1] * az - b_angvel[b, 2] * ay - w_vel[w, 0]
-            vy = b_vel[b, 1] + b_angvel[b, 2] * ax - b_angvel[b, 0] * az - w_vel[w, 1]
-            vz = b_vel[b, 2] + b_angvel[b, 0] * ay - b_angvel[b, 1] * ax - w_vel[w, 2]
+            wl_active[q] = 1
+            count += 1
+            if delta > worst * ri:
+                worst = delta / ri
+            a = ri - 0.5 * delta
+            ax = xi - a * nx - b_pos[bi, 0]
+            ay = yi - a * ny - b_pos[bi, 1]
+            az = zi - a * nz - b_pos[bi, 2]
+            vx = b_vel[bi, 0] + b_angvel[bi, 1] * az - b_angvel[bi, 2] * ay - w_vel[w, 0]
+            vy = b_vel[bi, 1] + b_angvel[bi, 2] * ax - b_angvel[bi, 0] * az - w_vel[w, 1]
+            vz = b_vel[bi, 2] + b_angvel[bi, 0] * ay - b_angvel[bi, 1] * ax - w_vel[w, 2]
             vn = vx * nx + vy * ny + vz * nz
             vtx = vx - vn * nx
             vty = vy - vn * ny
             vtz = vz - vn * nz
-            me = e_mat[e]
             mw = w_mat[w]
-            p = pair_params[me, mw]
-            fn, ftx, fty, ftz = pair_force(pair_model[me, mw], p, delta, -vn, vtx, vty, vtz,
-                                           nx, ny, nz, b_mass[b], r, dt, w_hist, hk)
+            p = pair_params[mi, mw]
+            fn, ftx, fty, ftz = pair_force(pair_model[mi, mw], p, delta, -vn, vtx, vty, vtz,
+                                           nx, ny, nz, b_mass[bi], ri, dt, wl_hist, q)
             fx = fn * nx + ftx
             fy = fn * ny + fty
             fz = fn * nz + ftz
-            b_force[b, 0] += fx
-            b_force[b, 1] += fy
-            b_force[b, 2] += fz
-            w_force[w, 0] -= fx
-            w_force[w, 1] -= fy
-            w_force[w, 2] -= fz
-            b_torque[b, 0] += ay * fz - az * fy
-            b_torque[b, 1] += az * fx - ax * fz
-            b_torque[b, 2] += ax * fy - ay * fx
+            tx = ay * fz - az * fy
+            ty = az * fx - ax * fz
+            tz = ax * fy - ay * fx
             if p[6] != 0.0:
-                tx, ty, tz = rolling_torque(p, fn, r, b_mass[b], b_angvel[b, 0],
-                                            b_angvel[b, 1], b_angvel[b, 2], dt, w_hist, hk)
-                b_torque[b, 0] += tx
-                b_torque[b, 1] += ty
-                b_torque[b, 2] += tz
+                rx, ry, rz = rolling_torque(p, fn, ri, b_mass[bi], b_angvel[bi, 0],
+                                            b_angvel[bi, 1], b_angvel[bi, 2], dt, wl_hist, q)
+                tx += rx
+                ty += ry
+                tz += rz
+            wl_f[q, 0] = fx
+            wl_f[q, 1] = fy
+            wl_f[q, 2] = fz
+            wl_f[q, 3] = tx
+            wl_f[q, 4] = ty
+            wl_f[q, 5] = tz
+        e_worst[i] = worst
+        e_count[i] = count
+
+
+@pjit
+def sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass,
+             b_invmass, b_invinertia, b_estart, nl_start, nl_active, nl_f, t_start, t_pair,
+             wl_start, wl_active, wl_f):
+    """Pass b: gravity plus the stored contact rows of each body's elements in a fixed
+    order; then (if ``integrate``) step 5, the integrator's post-force part, for that body."""
+    for b in prange(b_force.shape[0]):
+        m = b_mass[b]
+        fx = m * gravity[0]
+        fy = m * gravity[1]
+        fz = m * gravity[2]
+        tx = 0.0
+        ty = 0.0
+        tz = 0.0
+        for e in range(b_estart[b], b_estart[b + 1]):
+            for kk in range(nl_start[e], nl_start[e + 1]):
+                if nl_active[kk]:
+                    fx += nl_f[kk, 0]
+                    fy += nl_f[kk, 1]
+                    fz += nl_f[kk, 2]
+                    tx += nl_f[kk, 3]
+                    ty += nl_f[kk, 4]
+                    tz += nl_f[kk, 5]
+            for t in range(t_start[e], t_start[e + 1]):
+                kk = t_pair[t]
+                if nl_active[kk]:
+                    fx -= nl_f[kk, 0]
+                    fy -= nl_f[kk, 1]
+                    fz -= nl_f[kk, 2]
+                    tx += nl_f[kk, 6]
+                    ty += nl_f[kk, 7]
+                    tz += nl_f[kk, 8]
+            for q in range(wl_start[e], wl_start[e + 1]):
+                if wl_active[q]:
+                    fx += wl_f[q, 0]
+                    fy += wl_f[q, 1]
+                    fz += wl_f[q, 2]
+                    tx += wl_f[q, 3]
+                    ty += wl_f[q, 4]
+                    tz += wl_f[q, 5]
+        b_force[b, 0] = fx
+        b_force[b, 1] = fy
+        b_force[b, 2] = fz
+        b_torque[b, 0] = tx
+        b_torque[b, 1] = ty
+        b_torque[b, 2] = tz
+        if integrate:
+            post_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
+                            b_invinertia, dt)
+
+
+@jit
+def compute_forces(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
+                   b_mass, b_invmass, b_invinertia, b_estart, e_owner, e_radius, e_mat, e_pos,
+                   nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair, wl_start, wl_w,
+                   wl_hist, wl_active, wl_f, w_point, w_normal, w_vel, w_mat, w_force,
+                   pair_model, pair_params, e_worst, e_count, diag):
+    """Gravity plus all contact forces (passes a, b, c), then the integrator's post-force
+    part if ``integrate``; returns the largest overlap / radius.
+
+    With ``integrate`` False and ``dt`` = 0 it re-evaluates the forces of the current state
+    without advancing the contact history.
+    """
+    contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radius, e_mat,
+                 e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, wl_start, wl_w, wl_hist,
+                 wl_active, wl_f, w_point, w_normal, w_vel, w_mat, pair_model, pair_params,
+                 e_worst, e_count)
+    sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass,
+             b_invmass, b_invinertia, b_estart, nl_start, nl_active, nl_f, t_start, t_pair,
+             wl_start, wl_active, wl_f)
+    for w in range(w_force.shape[0]):
+        for d in range(3):
+            w_force[w, d] = 0.0
+    ne = e_pos.shape[0]
+    for q in range(wl_start[ne]):
+        if wl_active[q]:
+            w = wl_w[q]
+            for d in range(3):
+                w_force[w, d] -= wl_f[q, d]
+    worst = 0.0
+    worst_e = -1
+    active = 0
+    for i in range(ne):
+        active += e_count[i]
+        if e_worst[i] > worst:
+            worst = e_worst[i]
+            worst_e = i
     diag[6] = active
     if worst > diag[4]:
         diag[4] = worst
@@ -235,25 +360,30 @@ def compute_forces(dt, gravity, b_pos, b_vel, b_angvel, b_force, b_torque, b_mas
 
 
 @jit
-def run_steps(nsteps, dt, gravity, skin, max_overlap,
+def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements,
               b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass,
-              b_invinertia, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref, has_offsets,
-              nl_start, nl_j, nl_hist, new_start, new_j, new_hist,
-              w_point, w_normal, w_vel, w_mat, w_force, w_hist, pair_model, pair_params, diag):
+              b_invinertia, b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref,
+              nl_start, nl_j, nl_hist, nl_active, nl_f, new_start, new_j, new_hist,
+              new_active, t_start, t_pair, wl_start, wl_w, wl_hist, wl_active, wl_f,
+              wnew_start, wnew_w, wnew_hist, wnew_active, w_point, w_normal, w_vel, w_mat,
+              w_force, pair_model, pair_params, e_worst, e_count, diag):
     """Advance ``nsteps`` steps; stop early with a status in ``diag[0]``.
 
-    On a neighbour-list overflow the step stops after ``pre_force``; the caller grows the
-    buffers and calls :func:`finish_step` (with ``resume=True`` semantics) before going on.
+    On a list overflow the step stops after :func:`begin_step`; the caller grows the
+    buffers and calls :func:`finish_step` before going on.
     """
     diag[0] = STATUS_OK
     diag[1] = 0
     for s in range(nsteps):
-        pre_force(b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass, b_invinertia, dt)
-        finish_step(dt, gravity, skin, max_overlap, b_pos, b_vel, b_quat, b_angvel, b_force,
-                    b_torque, b_mass, b_invmass, b_invinertia, e_owner, e_offset, e_radius,
-                    e_mat, e_pos, e_ref, has_offsets, nl_start, nl_j, nl_hist, new_start,
-                    new_j, new_hist, w_point, w_normal, w_vel, w_mat, w_force, w_hist,
-                    pair_model, pair_params, diag)
+        begin_step(dt, update_elements, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
+                   b_invmass, b_invinertia, b_estart, e_offset, e_pos, e_ref, e_worst)
+        finish_step(dt, gravity, skin, max_overlap, update_elements, b_pos, b_vel, b_quat,
+                    b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia, b_estart,
+                    e_owner, e_offset, e_radius, e_mat, e_pos, e_ref, nl_start, nl_j, nl_hist,
+                    nl_active, nl_f, new_start, new_j, new_hist, new_active, t_start, t_pair,
+                    wl_start, wl_w, wl_hist, wl_active, wl_f, wnew_start, wnew_w, wnew_hist,
+                    wnew_active, w_point, w_normal, w_vel, w_mat, w_force, pair_model,
+                    pair_params, e_worst, e_count, diag)
         if diag[0] == STATUS_OK or diag[0] == STATUS_OVERLAP:
             diag[1] = s + 1
         if diag[0] != STATUS_OK:
@@ -261,31 +391,54 @@ def run_steps(nsteps, dt, gravity, skin, max_overlap,
 
 
 @jit
-def finish_step(dt, gravity, skin, max_overlap, b_pos, b_vel, b_quat, b_angvel, b_force,
-                b_torque, b_mass, b_invmass, b_invinertia, e_owner, e_offset, e_radius, e_mat,
-                e_pos, e_ref, has_offsets, nl_start, nl_j, nl_hist, new_start, new_j, new_hist,
-                w_point, w_normal, w_vel, w_mat, w_force, w_hist, pair_model, pair_params, diag):
-    """Steps 2-5 of a step (everything after ``pre_force``); sets ``diag[0]`` on trouble."""
-    update_element_positions(b_pos, b_quat, e_owner, e_offset, e_pos, has_offsets)
-    d2 = max_displacement_sq(e_pos, e_ref)
+def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_active,
+            new_start, new_j, new_hist, new_active, t_start, t_pair, wl_start, wl_w, wl_hist,
+            wl_active, wnew_start, wnew_w, wnew_hist, wnew_active, w_point, w_normal, diag):
+    """Rebuild both lists; on overflow set the status and the needed size, change nothing."""
+    need = build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist,
+                                nl_active, new_start, new_j, new_hist, new_active, t_start,
+                                t_pair)
+    if need > new_j.shape[0]:
+        diag[0] = STATUS_OVERFLOW
+        diag[3] = need
+        return
+    need = build_wall_list(e_pos, e_radius, skin, w_point, w_normal, wl_start, wl_w, wl_hist,
+                           wl_active, wnew_start, wnew_w, wnew_hist, wnew_active)
+    if need > wnew_w.shape[0]:
+        diag[0] = STATUS_WALL_OVERFLOW
+        diag[3] = need
+        return
+    for e in range(e_pos.shape[0]):
+        for d in range(3):
+            e_ref[e, d] = e_pos[e, d]
+    diag[2] += 1
+
+
+@jit
+def finish_step(dt, gravity, skin, max_overlap, update_elements, b_pos, b_vel, b_quat,
+                b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia, b_estart,
+                e_owner, e_offset, e_radius, e_mat, e_pos, e_ref, nl_start, nl_j, nl_hist,
+                nl_active, nl_f, new_start, new_j, new_hist, new_active, t_start, t_pair,
+                wl_start, wl_w, wl_hist, wl_active, wl_f, wnew_start, wnew_w, wnew_hist,
+                wnew_active, w_point, w_normal, w_vel, w_mat, w_force, pair_model,
+                pair_params, e_worst, e_count, diag):
+    """Steps 3-5 of a step (after :func:`begin_step`, which left each element's squared
+    displacement in ``e_worst``); sets ``diag[0]`` on trouble."""
+    d2 = largest(e_worst)
     if d2 != d2:
         diag[0] = STATUS_NAN
         return
     if d2 > 0.25 * skin * skin:
-        need = build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist,
-                                    new_start, new_j, new_hist)
-        if need > new_j.shape[0]:
-            diag[0] = STATUS_OVERFLOW
-            diag[3] = need
+        rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_active,
+                new_start, new_j, new_hist, new_active, t_start, t_pair, wl_start, wl_w,
+                wl_hist, wl_active, wnew_start, wnew_w, wnew_hist, wnew_active, w_point,
+                w_normal, diag)
+        if diag[0] != STATUS_OK:
             return
-        for e in range(e_pos.shape[0]):
-            for d in range(3):
-                e_ref[e, d] = e_pos[e, d]
-        diag[2] += 1
-    worst = compute_forces(dt, gravity, b_pos, b_vel, b_angvel, b_force, b_torque, b_mass,
-                           b_invmass, e_owner, e_radius, e_mat, e_pos, nl_start, nl_j,
-                           nl_hist, w_point, w_normal, w_vel, w_mat, w_force, w_hist,
-                           pair_model, pair_params, diag)
-    post_force(b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass, b_invinertia, dt)
+    worst = compute_forces(dt, True, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
+                           b_mass, b_invmass, b_invinertia, b_estart, e_owner, e_radius, e_mat,
+                           e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair,
+                           wl_start, wl_w, wl_hist, wl_active, wl_f, w_point, w_normal, w_vel,
+                           w_mat, w_force, pair_model, pair_params, e_worst, e_count, diag)
     if worst > max_overlap:
         diag[0] = STATUS_OVERLAP
