@@ -8,6 +8,7 @@ import warnings
 from collections.abc import Sequence
 from typing import Any
 
+import numba
 import numpy as np
 
 from . import plan as _plan
@@ -50,6 +51,9 @@ class Simulation:
         Largest overlap / radius tolerated during a run before it stops as unstable.
     overlap_tolerance : float
         Largest initial overlap / radius accepted at the first step.
+    threads : int, optional
+        Threads of the step kernels (default: numba's, i.e. all cores or
+        ``NUMBA_NUM_THREADS``). Results are identical for any number of threads.
 
     Order of one step (see :mod:`dpm.kernels.step`): integrator pre-force part, element
     positions, neighbour list (rebuilt when an element moved more than skin/2), gravity and
@@ -69,15 +73,18 @@ class Simulation:
         "dt_check": Parameter(default="refuse", kind="str"),
         "max_overlap": Parameter(default=0.5, low=0.0, high=2.0, low_open=True),
         "overlap_tolerance": Parameter(default=0.01, low=0.0),
+        "threads": Parameter(default=None, low=1, high=numba.config.NUMBA_NUM_THREADS,
+                             doc="number of threads"),
     }
 
     def __init__(self, dt: float, gravity: Sequence[float] = (0.0, 0.0, 0.0),
                  integrator: str = "velocity_verlet", skin: float | None = None,
                  dt_check: str = "refuse", max_overlap: float = 0.5,
-                 overlap_tolerance: float = 0.01) -> None:
+                 overlap_tolerance: float = 0.01, threads: int | None = None) -> None:
         v = validate("Simulation()", self.parameters, dict(
             dt=dt, gravity=gravity, integrator=integrator, skin=skin, dt_check=dt_check,
-            max_overlap=max_overlap, overlap_tolerance=overlap_tolerance))
+            max_overlap=max_overlap, overlap_tolerance=overlap_tolerance, threads=threads))
+        self.threads = None if threads is None else int(threads)
         if v["dt_check"] not in DT_CHECKS:
             raise ParameterError(f"Simulation(): dt_check={dt_check!r}; allowed: "
                                  f"{', '.join(DT_CHECKS)}")
@@ -471,6 +478,8 @@ class Simulation:
             validate("sim.run()", {"until": Parameter(low=self.time, unit="s")},
                      {"until": until})
             nsteps = max(0, math.ceil((until - self.time) / self.dt - 1e-9))
+        if self.threads is not None:
+            numba.set_num_threads(self.threads)
         if not self._prepared:
             self._prepare()
         if not self._forces_valid:

@@ -9,14 +9,24 @@ from .config import jit
 def rotate_by_angular_velocity(quat, i, wx, wy, wz, dt):
     """q_i <- exp(omega dt / 2) (x) q_i for a world-frame angular velocity, then renormalise.
 
-    Exact for constant omega over the step; the renormalisation removes round-off drift.
+    Exact for constant omega over the step (rotation by |omega| dt about omega/|omega|);
+    the renormalisation removes round-off drift. For a rotation angle below 0.1 rad per step
+    cos and sin are replaced by their Taylor series to the h^8 term (relative error below
+    1e-16), which spares two transcendental calls per body and step.
     """
-    w = math.sqrt(wx * wx + wy * wy + wz * wz)
-    if w == 0.0:
+    w2 = wx * wx + wy * wy + wz * wz
+    if w2 == 0.0:
         return
-    half = 0.5 * w * dt
-    s = math.sin(half) / w
-    a0 = math.cos(half)
+    h2 = 0.25 * w2 * dt * dt  # (half angle)^2
+    if h2 < 0.0025:  # half angle < 0.05 rad
+        a0 = 1.0 - h2 / 2.0 * (1.0 - h2 / 12.0 * (1.0 - h2 / 30.0 * (1.0 - h2 / 56.0)))
+        s = 0.5 * dt * (1.0 - h2 / 6.0 * (1.0 - h2 / 20.0 * (1.0 - h2 / 42.0
+                                                           * (1.0 - h2 / 72.0))))
+    else:
+        w = math.sqrt(w2)
+        half = 0.5 * w * dt
+        s = math.sin(half) / w
+        a0 = math.cos(half)
     a1 = wx * s
     a2 = wy * s
     a3 = wz * s
