@@ -30,6 +30,8 @@ from .state import Bodies, Contacts, Elements, WallContacts, Walls
 from .timestep import TimeStepReport
 
 DT_CHECKS = ("refuse", "warn", "off")
+#: scenes with fewer elements run on one thread unless ``threads`` is given
+SMALL_SCENE = 4000
 
 
 class Simulation:
@@ -52,8 +54,9 @@ class Simulation:
     overlap_tolerance : float
         Largest initial overlap / radius accepted at the first step.
     threads : int, optional
-        Threads of the step kernels (default: numba's, i.e. all cores or
-        ``NUMBA_NUM_THREADS``). Results are identical for any number of threads.
+        Threads of the step kernels. Default: one thread below ``SMALL_SCENE`` elements
+        (there the cost of starting parallel loops exceeds their gain), else numba's number
+        (all cores, or ``NUMBA_NUM_THREADS``). Results are identical for any number.
 
     Order of one step (see :mod:`dpm.kernels.step`): integrator pre-force part, element
     positions, neighbour list (rebuilt when an element moved more than skin/2), gravity and
@@ -478,10 +481,19 @@ class Simulation:
             validate("sim.run()", {"until": Parameter(low=self.time, unit="s")},
                      {"until": until})
             nsteps = max(0, math.ceil((until - self.time) / self.dt - 1e-9))
-        if self.threads is not None:
-            numba.set_num_threads(self.threads)
         if not self._prepared:
             self._prepare()
+        threads_before = numba.get_num_threads()
+        if self.threads is not None:
+            numba.set_num_threads(self.threads)
+        elif len(self.elements) < SMALL_SCENE:
+            numba.set_num_threads(1)
+        try:
+            self._run(nsteps, progress)
+        finally:
+            numba.set_num_threads(threads_before)
+
+    def _run(self, nsteps: int, progress: bool | None) -> None:
         if not self._forces_valid:
             self._prime_forces()
             self._update_boundary_loads()
