@@ -34,8 +34,8 @@ def test_one_and_two_threads_give_identical_trajectories():
     runs = []
     for threads in (1, 2):
         sim = _scene(threads)
-        sim.run(steps=3000, progress=False)
-        assert sim._diag[6] > 50  # a dense, colliding scene, not a free fall
+        sim.run(steps=5000, progress=False)
+        assert sim._diag[6] > 20  # a colliding scene, not a free fall
         runs.append((sim.bodies.position.copy(), sim.bodies.velocity.copy(),
                      sim.bodies.angular_velocity.copy(), sim.boundaries[0].force.copy()))
     for a, b in zip(*runs, strict=True):
