@@ -149,8 +149,8 @@ class Simulation:
         cls = self._registry.lookup("impact_model", model, call)
         law = cls(call=call, **params)
         if law.needs_elastic_constants:
-            missing = [f"{m.name}.{p}" for m in (a, b) for p in ("young", "poisson")
-                       if getattr(m, p) is None]
+            missing = [f"{m.name}.{p}" for m in dict.fromkeys((a, b))
+                       for p in ("young", "poisson") if getattr(m, p) is None]
             if missing:
                 raise ParameterError(f"{call}: model={model!r} needs young and poisson; "
                                      f"missing: {', '.join(missing)}")
@@ -344,24 +344,39 @@ class Simulation:
             raise SceneError("scene check before the first step:\n  " + "\n  ".join(problems))
 
     def _check_initial_overlaps(self) -> None:
-        e = self.elements
-        if len(e) < 2:
-            return
-        pairs = self.contacts.start[-1]
-        if pairs == 0:
-            return
-        i = np.repeat(np.arange(len(e)), np.diff(self.contacts.start))
-        j = self.contacts.key[:pairs]
-        d = np.linalg.norm(e.position[i] - e.position[j], axis=1)
-        ratio = (e.radius[i] + e.radius[j] - d) / np.minimum(e.radius[i], e.radius[j])
-        k = int(np.argmax(ratio))
-        if ratio[k] > self.overlap_tolerance:
-            n_bad = int(np.sum(ratio > self.overlap_tolerance))
-            ida, idb = self.bodies.id[e.owner[i[k]]], self.bodies.id[e.owner[j[k]]]
-            raise SceneError(
-                f"initial overlap: {n_bad} pair(s) overlap more than overlap_tolerance="
-                f"{self.overlap_tolerance:g} of the smaller radius; worst: particles {ida} and "
-                f"{idb} overlap by {ratio[k]:.3g} of the radius")
+        """Refuse overlaps beyond ``overlap_tolerance`` (of the smaller radius) between
+        particles and between particles and boundaries, all listed in one error."""
+        e, b, tol = self.elements, self.bodies, self.overlap_tolerance
+        problems = []
+        pairs = self.contacts.count
+        if pairs:
+            i = np.repeat(np.arange(len(e)), np.diff(self.contacts.start))
+            j = self.contacts.key[:pairs]
+            d = np.linalg.norm(e.position[i] - e.position[j], axis=1)
+            ratio = (e.radius[i] + e.radius[j] - d) / np.minimum(e.radius[i], e.radius[j])
+            k = int(np.argmax(ratio))
+            if ratio[k] > tol:
+                problems.append(
+                    f"{int(np.sum(ratio > tol))} particle pair(s) overlap more than "
+                    f"overlap_tolerance={tol:g} of the smaller radius; worst: particles "
+                    f"{b.id[e.owner[i[k]]]} and {b.id[e.owner[j[k]]]} overlap by "
+                    f"{ratio[k]:.3g} of the radius")
+        wc, w = self.wall_contacts, self.walls
+        if wc.count:
+            i = np.repeat(np.arange(len(e)), np.diff(wc.start))
+            p = wc.key[:wc.count]
+            dist = np.einsum("ij,ij->i", e.position[i] - w.point[p], w.normal[p])
+            ratio = (e.radius[i] - dist) / e.radius[i]
+            k = int(np.argmax(ratio))
+            if ratio[k] > tol:
+                bd = self.boundaries[w.owner[p[k]]]
+                problems.append(
+                    f"{int(np.sum(ratio > tol))} particle(s) overlap a boundary more than "
+                    f"overlap_tolerance={tol:g} of the radius; worst: particle "
+                    f"{b.id[e.owner[i[k]]]} overlaps boundary {int(w.owner[p[k]])} ({bd.name}) "
+                    f"by {ratio[k]:.3g} of its radius")
+        if problems:
+            raise SceneError("initial overlap: " + "; ".join(problems))
 
     def _prepare(self) -> None:
         """Validate the scene, pack the tables, pick and compile the step kernels."""
@@ -410,6 +425,8 @@ class Simulation:
             self.contacts.reset(n_el, 8 * n_el)
             self.wall_contacts.reset(n_el, n_el)
         self._e_worst = np.zeros(n_el)
+        self._vf = np.zeros((len(b), 3))  # velocities the forces see (set by the integrator)
+        self._wf = np.zeros((len(b), 3))
         self._e_count = np.zeros(n_el, np.int64)
         if not self._spheres_only:
             self._module.update_element_positions(b.position, b.orientation, b.element_start,
@@ -442,7 +459,8 @@ class Simulation:
         b, e, c, wc, w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
         return (self.gravity, self.skin, self.max_overlap, not self._spheres_only,
                 b.position, b.velocity, b.orientation, b.angular_velocity, b.force, b.torque,
-                b.mass, b.invmass, b.invinertia, b.element_start, e.owner, e.offset, e.radius,
+                b.mass, b.invmass, b.invinertia, self._vf, self._wf, b.element_start, e.owner,
+                e.offset, e.radius,
                 e.material, e.position, e.reference, c.start, c.key, c.history, c.active,
                 c.force, c.new_start, c.new_key, c.new_history, c.new_active, c.t_start,
                 c.t_pair, wc.start, wc.key, wc.history, wc.active, wc.force, wc.new_start,
@@ -453,9 +471,12 @@ class Simulation:
     def _prime_forces(self) -> None:
         """Forces of the current state without advancing contact history (dt = 0)."""
         b, e, c, wc, w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
+        self._vf[:] = b.velocity
+        self._wf[:] = b.angular_velocity
         self._module.compute_forces(
             0.0, False, self.gravity, b.position, b.velocity, b.orientation, b.angular_velocity,
-            b.force, b.torque, b.mass, b.invmass, b.invinertia, b.element_start, e.owner,
+            b.force, b.torque, b.mass, b.invmass, b.invinertia, self._vf, self._wf,
+            b.element_start, e.owner,
             e.radius, e.material, e.position,
             c.start, c.key, c.history, c.active, c.force, c.t_start, c.t_pair, wc.start,
             wc.key, wc.history, wc.active, wc.force, w.point, w.normal, w.velocity,
@@ -577,8 +598,9 @@ class Simulation:
             self._fail("a velocity became NaN or inf")
         if v[k] * self.dt > 0.5 * b.radius[k]:
             self._fail(f"particle {b.id[k]} moves {v[k] * self.dt:.3g} m per step, more than "
-                       f"half its radius {b.radius[k]:.3g} m (speed {v[k]:.3g} m/s): energy is "
-                       "exploding")
+                       f"half its radius {b.radius[k]:.3g} m (speed {v[k]:.3g} m/s): contacts "
+                       "would be missed (tunnelling) or start at unresolved overlaps; "
+                       f"dt must stay below {0.5 * b.radius[k] / v[k]:.3g} s at this speed")
 
     def _fail(self, what: str) -> None:
         rep = self.time_step_report() if np.all(np.isfinite(self.bodies.velocity)) else None

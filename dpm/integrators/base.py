@@ -9,9 +9,11 @@ class Integrator:
     """A time integrator.
 
     Subclass it and set ``kernel_module`` to a module defining two numba functions
-    ``pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt)``
-    and ``post_force_body(...)`` (same arguments) that advance body ``i``; the step calls
+    ``pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt,
+    vf, wf)`` and ``post_force_body(i, ..., dt)`` that advance body ``i``; the step calls
     them inside its parallel loops over bodies, before and after the force evaluation.
+    ``pre_force_body`` also writes ``vf[i]``, ``wf[i]``: the velocity and angular velocity
+    that velocity-dependent forces of this step see.
     ``order`` is the global order of accuracy for smooth forces.
     """
 

@@ -3,12 +3,13 @@
     v_{n+1} = v_n + dt F(x_n, v_n) / m        omega_{n+1} = omega_n + dt T_n / I
     x_{n+1} = x_n + dt v_{n+1}                q_{n+1} = exp(omega_{n+1} dt / 2) q_n
 
-All work happens after the force evaluation. Rotation in the world frame with a scalar
-moment of inertia (spheres).
+All work happens after the force evaluation, which sees the current velocities v_n.
+Rotation in the world frame with a scalar moment of inertia (spheres).
 
 An integrator module gives two per-body functions that the step calls inside its own
-parallel loops over bodies: ``pre_force_body`` (before the forces of the step) and
-``post_force_body`` (after them).
+parallel loops over bodies: ``pre_force_body`` (before the forces of the step; it also sets
+``vf``, ``wf``, the velocities that velocity-dependent forces see) and ``post_force_body``
+(after them).
 """
 
 from .config import jit
@@ -16,9 +17,11 @@ from .quaternion import rotate_by_angular_velocity
 
 
 @jit
-def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt):
-    """Nothing to do before the forces."""
-    return
+def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, vf, wf):
+    """Forces see v_n and omega_n."""
+    for d in range(3):
+        vf[i, d] = vel[i, d]
+        wf[i, d] = angvel[i, d]
 
 
 @jit
