@@ -3,4 +3,7 @@
 from .base import BodyBatch, Shape
 from .sphere import Sphere
 
-__all__ = ["BodyBatch", "Shape", "Sphere"]
+#: the shapes dpm registers under these names (dpm.builtin)
+BUILTIN_SHAPES: dict[str, type[Shape]] = {"sphere": Sphere}
+
+__all__ = ["BUILTIN_SHAPES", "BodyBatch", "Shape", "Sphere"]
