@@ -3,10 +3,12 @@
 :func:`step_module` copies :mod:`dpm.kernels.step` with its ``bindings`` block rewritten so
 that the scene's contact laws become ``law_0 .. law_k`` and its integrator's
 ``pre_force_body``/``post_force_body`` are imported. The file goes to the dpm cache
-directory under a name that carries a hash of every source it depends on: numba's on-disk
-cache of a kernel does not notice when a jitted function it calls in another file changes
-(numba #1833), so a changed law or kernel gives a new file name and a fresh compile instead
-of stale code.
+directory under a name that carries a fingerprint of every kernel it depends on: numba's
+on-disk cache of a kernel does not notice when a jitted function it calls in another file
+changes (numba #1833), so a changed law or kernel gives a new file name and a fresh compile
+instead of stale code. The fingerprint is taken from the code objects of the kernels as they
+are in memory (not from the files on disk): a process that imported a kernel before its file
+was edited compiles the code it holds, and must not store it under the new file's name.
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ import re
 import sys
 from pathlib import Path
 from types import ModuleType
+
+from numba.core.dispatcher import Dispatcher
 
 from . import kernels
 
@@ -34,11 +38,26 @@ def cache_dir() -> Path:
     return Path(root) / "steps"
 
 
-def _source_of(module_name: str) -> str:
-    spec = importlib.util.find_spec(module_name)
-    if spec is None or spec.origin is None:
-        raise ImportError(f"kernel module {module_name!r} not found")
-    return Path(spec.origin).read_text()
+def _code_bytes(code) -> bytes:
+    """Deterministic bytes of a code object (marshal's output depends on reference counts)."""
+    consts = [(_code_bytes(c) if hasattr(c, "co_code") else repr(c).encode())
+              for c in code.co_consts]
+    return b"|".join([code.co_code, *consts, " ".join(code.co_names).encode(),
+                      " ".join(code.co_varnames).encode()])
+
+
+def _fingerprint(module: ModuleType) -> bytes:
+    """Bytes that change when any jitted function or scalar constant of ``module`` does, as
+    the module is in memory."""
+    parts = [module.__name__.encode()]
+    for name in sorted(vars(module)):
+        obj = vars(module)[name]
+        if isinstance(obj, Dispatcher) and getattr(obj.py_func, "__module__", None) == \
+                module.__name__:
+            parts.append(name.encode() + _code_bytes(obj.py_func.__code__))
+        elif isinstance(obj, bool | int | float) and not name.startswith("_"):
+            parts.append(f"{name}={obj!r}".encode())
+    return b"\0".join(parts)
 
 
 def render(laws: list[tuple[str, str]], integrator_module: str) -> str:
@@ -71,11 +90,14 @@ def step_module(laws: list[tuple[str, str]], integrator_module: str) -> ModuleTy
         laws = [("dpm.kernels.law_linear", "linear_spring_dashpot")]
     src = render(laws, integrator_module)
     h = hashlib.sha256(src.encode())
-    kdir = Path(kernels.__file__).parent
-    for f in sorted(kdir.glob("*.py")):
-        h.update(f.read_bytes())
     for mod in sorted({m for m, _ in laws} | {integrator_module}):
-        h.update(_source_of(mod).encode())
+        importlib.import_module(mod)
+    kdir = Path(kernels.__file__).parent
+    for f in sorted(kdir.glob("*.py")):  # every kernel module the step may reach
+        importlib.import_module(f"dpm.kernels.{f.stem}")
+    for mod in sorted(m for m in sys.modules if m.startswith("dpm.kernels.")
+                      or m in {m for m, _ in laws} | {integrator_module}):
+        h.update(_fingerprint(sys.modules[mod]))
     name = f"dpm_step_{h.hexdigest()[:20]}"
     if name in _LOADED:
         return _LOADED[name]

@@ -177,9 +177,12 @@ class Simulation:
                       orientations: np.ndarray | None = None, **shape_params: Any) -> np.ndarray:
         """Add bodies of ``shape`` (a registered name or a Shape instance); return their ids.
 
-        ``positions`` (N, 3) [m]; ``velocities``, ``angular_velocities`` (N, 3) [m/s,
-        rad/s]; ``orientations`` (N, 4) unit quaternions (w, x, y, z). Shape parameters are
-        keyword arguments, e.g. ``radius=1e-3`` (scalar or one per particle).
+        ``positions`` (N, 3) [m] of the centres of mass; ``velocities``,
+        ``angular_velocities`` (N, 3) [m/s, rad/s]; ``orientations`` (N, 4) unit quaternions
+        (w, x, y, z) rotating the shape's documented frame into the world. Shape parameters
+        are keyword arguments, e.g. ``radius=1e-3`` (scalar or one per particle). The stored
+        ``bodies.orientation`` is that of the principal frame (shape frame times the shape's
+        principal rotation).
         """
         call = f"sim.add_particles({shape if isinstance(shape, str) else type(shape).__name__!r})"
         imat = self._material_index(material, call)
@@ -204,6 +207,7 @@ class Simulation:
             cls = self._registry.lookup("shape", shape, call)
             sh = cls(call=call, **shape_params)
         batch = sh.build(n, material.density)
+        quat = _quat_multiply(quat, np.asarray(batch.principal_rotation, float))
         first = len(self.bodies)
         ids = np.arange(self._next_id, self._next_id + n, dtype=np.int64)
         self._next_id += n
@@ -649,6 +653,24 @@ class Simulation:
     def momentum(self) -> np.ndarray:
         """Total linear momentum [kg m/s]."""
         return (self.bodies.mass[:, None] * self.bodies.velocity).sum(axis=0)
+
+    def angular_momentum(self) -> np.ndarray:
+        """Total angular momentum about the origin [kg m2/s]: sum m x cross v + R I R^T w."""
+        b = self.bodies
+        spin_body = b.inertia * _to_body(b.orientation, b.angular_velocity)
+        spin = _to_body(b.orientation * np.array([1.0, -1.0, -1.0, -1.0]), spin_body)
+        orbital = np.cross(b.position, b.mass[:, None] * b.velocity)
+        return (orbital + spin).sum(axis=0)
+
+
+def _quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise Hamilton product a (x) b of (N, 4) quaternions (w, x, y, z)."""
+    a0, a1, a2, a3 = np.moveaxis(a, -1, 0)
+    b0, b1, b2, b3 = np.moveaxis(np.broadcast_to(b, a.shape), -1, 0)
+    return np.stack([a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+                     a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+                     a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+                     a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0], axis=-1)
 
 
 def _to_body(q: np.ndarray, v: np.ndarray) -> np.ndarray:

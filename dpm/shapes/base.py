@@ -14,9 +14,12 @@ from ..parameters import Parameter, validate
 class BodyBatch:
     """Mass properties and sphere elements of ``n`` new bodies.
 
-    mass (n,), inertia (n, 3) principal moments, quaternion of the principal frame is the
-    body frame; element_count (n,) elements per body, element_offset (m, 3) body-frame
-    offsets, element_radius (m,), bounding_radius (n,).
+    mass (n,); inertia (n, 3) principal moments; element_count (n,) elements per body;
+    element_offset (m, 3) element centres in the principal (body) frame, centre of mass at
+    the origin; element_radius (m,); bounding_radius (n,); principal_rotation (n, 4) unit
+    quaternions (w, x, y, z) rotating the principal frame into the shape's documented
+    frame (offset_shape = R(q) offset_principal; identity when they coincide). A body's
+    orientation is that of its principal frame: q_body = q_user (x) principal_rotation.
     """
 
     mass: np.ndarray
@@ -25,6 +28,12 @@ class BodyBatch:
     element_offset: np.ndarray
     element_radius: np.ndarray
     bounding_radius: np.ndarray
+    principal_rotation: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.principal_rotation is None:
+            n = len(self.mass)
+            self.principal_rotation = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
 
 
 class Shape:
