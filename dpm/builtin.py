@@ -4,14 +4,23 @@ from __future__ import annotations
 
 from .boundaries import Box, Plane
 from .hookspecs import Register, hookimpl
-from .impact import HertzMindlin, LinearSpringDashpot
+from .impact import (
+    HertzBrilliantov,
+    HertzMindlin,
+    Hooke,
+    LinearCohesion,
+    LinearSpringDashpot,
+    MawLinearSpring,
+    WaltonBraun,
+)
 from .integrators import SymplecticEuler, VelocityVerlet
-from .shapes import Sphere
+from .shapes import BUILTIN_SHAPES
 
 
 @hookimpl
 def dpm_register_shapes(register: Register) -> None:
-    register("sphere", Sphere)
+    for name, cls in BUILTIN_SHAPES.items():
+        register(name, cls)
 
 
 @hookimpl
@@ -23,7 +32,12 @@ def dpm_register_boundaries(register: Register) -> None:
 @hookimpl
 def dpm_register_impact_models(register: Register) -> None:
     register("linear_spring_dashpot", LinearSpringDashpot)
+    register("maw_linear_spring", MawLinearSpring)
+    register("hooke", Hooke)
+    register("hertz_brilliantov", HertzBrilliantov)
     register("hertz_mindlin", HertzMindlin)
+    register("walton_braun", WaltonBraun)
+    register("linear_cohesion", LinearCohesion)
 
 
 @hookimpl

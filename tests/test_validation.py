@@ -233,8 +233,8 @@ def test_particles_refuse_wrong_shapes_and_unknown_parameters(sim, glass):
                           velocities=[(0, 0, 0)])
     with pytest.raises(dpm.ParameterError, match=r"unknown parameter radiuss=.*allowed: radius"):
         sim.add_particles("sphere", material=glass, radius=R, radiuss=R, positions=[(0, 0, 0)])
-    with pytest.raises(dpm.UnknownNameError, match=r"'cube'.*registered: .*sphere"):
-        sim.add_particles("cube", material=glass, radius=R, positions=[(0, 0, 0)])
+    with pytest.raises(dpm.UnknownNameError, match=r"'dodecahedron'.*registered: .*sphere"):
+        sim.add_particles("dodecahedron", material=glass, radius=R, positions=[(0, 0, 0)])
     with pytest.raises(dpm.ParameterError, match="orientations has a zero quaternion"):
         sim.add_particles("sphere", material=glass, radius=R, positions=[(0, 0, 0)],
                           orientations=[(0, 0, 0, 0)])

@@ -14,7 +14,9 @@ from ..material import Material
 from ..parameters import Parameter, validate
 
 #: rolling resistance models -> id in pair_params slot 6 (see dpm.kernels.rolling)
-ROLLING_MODELS = {"constant_torque": 1}
+ROLLING_MODELS = {"constant_torque": 1, "epsd": 2}
+#: rolling models that read a normal stiffness from slot 5 and eta_r from slot 6
+_ROLLING_WITH_SPRING = {"epsd"}
 
 COMMON = {
     "restitution": Parameter(default=0.5, low=0.0, high=1.0, low_open=True,
@@ -24,6 +26,9 @@ COMMON = {
                                   doc="rolling friction coefficient mu_r (torque mu_r F_n R*)"),
     "rolling_model": Parameter(default="constant_torque", kind="str",
                                doc="rolling resistance model: " + ", ".join(ROLLING_MODELS)),
+    "rolling_damping": Parameter(default=0.3, low=0.0, high=1.0, high_open=True,
+                                 doc="rolling_model='epsd': viscous damping ratio eta_r of the "
+                                     "rolling spring (Ai et al. 2011 advise 0.3)"),
 }
 
 
@@ -48,7 +53,9 @@ class ImpactModel:
     ``("package.module", "function")`` with the signature of
     :func:`dpm.kernels.law_linear.linear_spring_dashpot`, and fill the pair constants in
     :meth:`pair_row` with :meth:`_row` (slots 6 and 7 carry the rolling resistance model
-    and coefficient, read by the step; slots 0..5 are the law's own).
+    and coefficient, read by the step; slots 0..5 are the law's own, except that the
+    ``epsd`` rolling model takes slot 5 for the normal stiffness its spring scales with:
+    a law that offers it fills at most slots 0..4 and passes ``stiffness=`` to ``_row``).
     """
 
     name: ClassVar[str] = ""
@@ -73,13 +80,25 @@ class ImpactModel:
         """Duration [s] of a head-on collision at ``speed`` (for the time-step check)."""
         raise NotImplementedError
 
-    def _row(self, *values: float) -> np.ndarray:
+    def _row(self, *values: float, stiffness: float | None = None) -> np.ndarray:
+        """Pack the law's constants; add the rolling model's (slots 6, 7 and for ``epsd`` 5).
+
+        ``stiffness``: a representative normal stiffness k_n [N/m] of the pair, which the
+        ``epsd`` rolling spring scales with (k_r = 2.25 mu_r^2 R*^2 k_n).
+        """
         row = np.zeros(N_PAIR_PARAMS)
         row[: len(values)] = values
         mu_r = float(self.params.get("rolling_friction", 0.0))
         if mu_r > 0.0:
-            row[6] = ROLLING_MODELS[self.params.get("rolling_model", "constant_torque")]
+            rm = self.params.get("rolling_model", "constant_torque")
+            row[6] = ROLLING_MODELS[rm]
             row[7] = mu_r
+            if rm in _ROLLING_WITH_SPRING:
+                if len(values) > 5 or stiffness is None:
+                    raise ParameterError(f"{self.call}: rolling_model={rm!r} is not offered by "
+                                         f"{type(self).__name__}; allowed: constant_torque")
+                row[5] = stiffness if math.isfinite(stiffness) else 0.0
+                row[6] += float(self.params.get("rolling_damping", 0.3))
         return row
 
 
@@ -87,6 +106,14 @@ def hertz_contact_time(meff: float, reff: float, estar: float, speed: float) -> 
     """Elastic Hertz contact duration t = 2.868 (m*^2 / (R* E*^2 v))^(1/5) (Johnson 1985)."""
     speed = max(speed, 1e-12)
     return 2.868265699194 * (meff**2 / (reff * estar**2 * speed)) ** 0.2
+
+
+def hertz_equivalent_stiffness(meff: float, reff: float, estar: float, speed: float) -> float:
+    """Maw's linear stiffness that stores the strain energy of a Hertz contact at ``speed``:
+    k = 16/15 sqrt(R*) E* (15 m* v^2 / (16 sqrt(R*) E*))^(1/5) (DPM thesis eq. 2.29)."""
+    speed = max(speed, 1e-12)
+    h = 16.0 / 15.0 * math.sqrt(reff) * estar
+    return h * (meff * speed * speed / h) ** 0.2
 
 
 def hertz_beta(restitution: float) -> float:

@@ -58,7 +58,8 @@ class LinearSpringDashpot(ImpactModel):
 
     Normal:      F_n = max(0, k_n d + c_n d'),  c_n = 2 zeta sqrt(m* k_n)
     Tangential:  spring k_t = kappa k_n with history, dashpot c_t = 2 zeta_t sqrt(m* k_n),
-                 Coulomb limit mu F_n.
+                 Coulomb limit mu F_n. ``tangential_stiffness_ratio=0`` gives the thesis'
+                 purely viscous F_t = min(c_t |v_t|, mu F_n) (eq. 2.28).
 
     The damping ratio zeta is solved so that the restitution *with the attractive force cut
     off* is the one set (the thesis' eq. 2.21 ignores the cut-off and gives e = 0.55 for a
@@ -89,7 +90,7 @@ class LinearSpringDashpot(ImpactModel):
         zt = self.params["tangential_damping_ratio"]
         return self._row(self.params["stiffness"], zeta, self.params["friction"],
                          self.params["tangential_stiffness_ratio"],
-                         zeta if zt is None else zt)
+                         zeta if zt is None else zt, stiffness=self.params["stiffness"])
 
     def contact_time(self, a, b, meff, reff, speed):
         return cutoff_contact_time(self.damping_ratio, math.sqrt(self.params["stiffness"] / meff))

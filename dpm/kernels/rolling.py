@@ -2,8 +2,22 @@
 
 Model 1, constant torque (DPM thesis eq. 2.53 with the unit vector, Zhou et al. 1999):
     T_r = -mu_r F_n R* w_rel / |w_rel|,   w_rel = w_i - w_j
-Slot 7 holds mu_r; history slots 3..5 of a contact are reserved for rolling models with a
-spring (elastic-plastic spring-dashpot models).
+A rolling sphere decelerates at 5/7 mu_r g and stops after 7 v0^2 / (10 mu_r g), but at rest
+the torque keeps flipping with the sign of w (it never lets a heap settle exactly).
+
+Model 2, elastic-plastic spring-dashpot (EPSD, "type C" of Ai, Chen, Rotter & Ooi 2011,
+Powder Technol. 206, 269; Iwashita & Oda 1998 for the spring):
+    k_r  = 2.25 mu_r^2 R*^2 k_n                       rolling stiffness
+    M_k <- M_k - k_r w_rel dt,  |M_k| <= M_m = mu_r R* max(F_n, 0)   (spring, plastic limit)
+    M_d  = -eta_r C_crit w_rel while |M_k| < M_m, 0 at the plastic limit,
+    C_crit = 2 sqrt(I_r k_r),  I_r = 7/5 m* R*^2 (exact for a sphere on a wall)
+    T_r  = M_k + M_d
+Under full mobilisation it is the constant torque of model 1; below it a spring that holds a
+static moment, so a sphere on a slope tan(theta) < mu_r and a heap come to rest.
+``pair_params`` slot 5 holds k_n (a representative normal stiffness from the impact model),
+slot 6 holds 2 + eta_r (eta_r in [0, 1)), slot 7 mu_r; history slots 3..5 hold M_k.
+The kernel sees the whole relative angular velocity (the contact normal is not passed), so
+the spring also resists twisting, as model 1 does.
 """
 
 import math
@@ -12,6 +26,7 @@ from .config import jit
 
 ROLLING_NONE = 0
 ROLLING_CONSTANT_TORQUE = 1
+ROLLING_EPSD = 2
 
 
 @jit
@@ -24,4 +39,26 @@ def rolling_torque(p, fn, reff, meff, wx, wy, wz, dt, hist, k):
             return 0.0, 0.0, 0.0
         t = p[7] * fn * reff / w
         return -t * wx, -t * wy, -t * wz
+    if model == ROLLING_EPSD:
+        mu_r = p[7]
+        kr = 2.25 * mu_r * mu_r * reff * reff * p[5]
+        mx = hist[k, 3] - kr * wx * dt
+        my = hist[k, 4] - kr * wy * dt
+        mz = hist[k, 5] - kr * wz * dt
+        mm = mu_r * reff * max(fn, 0.0)
+        mk = math.sqrt(mx * mx + my * my + mz * mz)
+        cr = 0.0
+        if mk >= mm:
+            if mk > 0.0:
+                r = mm / mk
+                mx *= r
+                my *= r
+                mz *= r
+        else:
+            eta = p[6] - ROLLING_EPSD
+            cr = 2.0 * eta * math.sqrt(1.4 * meff * reff * reff * kr)
+        hist[k, 3] = mx
+        hist[k, 4] = my
+        hist[k, 5] = mz
+        return mx - cr * wx, my - cr * wy, mz - cr * wz
     return 0.0, 0.0, 0.0
