@@ -15,7 +15,7 @@ pair_params row: [E*, G*, A, mu, zeta_t, (rolling), rolling model, mu_r]
 import math
 
 from .config import jit
-from .law_hertz_mindlin import spring_coulomb_slip as spring_coulomb
+from .tangential import spring_coulomb
 
 
 @jit

@@ -13,7 +13,7 @@ pair_params row: [E*, zeta, mu, kappa, zeta_t, (rolling), rolling model, mu_r]
 import math
 
 from .config import jit
-from .law_hertz_mindlin import spring_coulomb_slip as spring_coulomb
+from .tangential import spring_coulomb
 
 
 @jit

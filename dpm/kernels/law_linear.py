@@ -2,7 +2,7 @@
 
 Normal:      F_n = max(0, k_n delta + c_n delta'),   c_n = 2 zeta sqrt(m* k_n)
 Tangential:  spring-dashpot with history and Coulomb limit
-             (:func:`.law_hertz_mindlin.spring_coulomb_slip`: while sliding the spring alone
+             (:func:`.tangential.spring_coulomb`: while sliding the spring alone
              carries mu F_n), k_t = kappa k_n,  c_t = 2 zeta_t sqrt(m* k_n)
 
 The damping ratio zeta is solved in the object layer so that the restitution coefficient
@@ -17,7 +17,7 @@ pair_params row: [k_n, zeta, mu, kappa, zeta_t, 0, rolling model, mu_r]
 import math
 
 from .config import jit
-from .law_hertz_mindlin import spring_coulomb_slip as spring_coulomb
+from .tangential import spring_coulomb
 
 
 @jit

@@ -15,7 +15,7 @@ pair_params row: [E*, G*, beta, mu, k_c, (rolling), rolling model, mu_r]
 import math
 
 from .config import jit
-from .law_hertz_mindlin import spring_coulomb_slip as spring_coulomb
+from .tangential import spring_coulomb
 
 SQRT_5_6 = math.sqrt(5.0 / 6.0)
 
