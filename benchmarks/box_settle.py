@@ -23,6 +23,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import numba
+
 HERE = Path(__file__).resolve().parent
 SCENE = HERE / "scenes" / "box_settle"
 RESULTS = HERE / "results"
@@ -36,11 +38,12 @@ def _example():
     return mod
 
 
-def run_dpm(lat, steps, warmup=20):
+def run_dpm(lat, steps, threads=1, warmup=20):
     ex = _example()
     csv = ex.initial_packing(*lat)
     t0 = time.perf_counter()
     sim = ex.build(csv)
+    sim.threads = threads
     sim.run(steps=warmup, progress=False)  # compile (or load from cache) and prime
     first = time.perf_counter() - t0
     t0 = time.perf_counter()
@@ -49,7 +52,7 @@ def run_dpm(lat, steps, warmup=20):
     n = len(sim.bodies)
     return {"particles": n, "steps": steps, "timed_steps": steps - warmup, "wall_s": wall,
             "particle_steps_per_s": n * (steps - warmup) / wall,
-            "time_to_first_steps_s": first, "threads": 1,  # the kernels are serial so far
+            "time_to_first_steps_s": first, "threads": threads,
             "mean_z_m": float(sim.bodies.position[:, 2].mean()),
             "neighbour_rebuilds": sim.rebuild_count}
 
@@ -82,16 +85,21 @@ def plot(result, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    names = ["dpm"] + (["LIGGGHTS"] if result["liggghts"] else [])
-    vals = [result["dpm"]["particle_steps_per_s"]]
+    names, vals, colors = ["dpm 1 thread"], [result["dpm"]["particle_steps_per_s"]], ["tab:blue"]
+    if result["dpm_2_threads"]:
+        names.append("dpm 2 threads")
+        vals.append(result["dpm_2_threads"]["particle_steps_per_s"])
+        colors.append("tab:cyan")
     if result["liggghts"]:
+        names.append("LIGGGHTS 1 core")
         vals.append(result["liggghts"]["particle_steps_per_s"])
-    fig, ax = plt.subplots(figsize=(5, 3.2))
-    bars = ax.bar(names, vals, color=["tab:blue", "tab:gray"][: len(vals)])
+        colors.append("tab:gray")
+    fig, ax = plt.subplots(figsize=(6, 3.4))
+    bars = ax.bar(names, vals, color=colors)
     ax.bar_label(bars, labels=[f"{v:.3g}" for v in vals])
     ax.set_ylabel("particle-steps per second")
     n, s = result["dpm"]["particles"], result["dpm"]["steps"]
-    ax.set_title(f"box_settle, {n} spheres, {s} steps, 1 core"
+    ax.set_title(f"box_settle, {n} spheres, {s} steps"
                  + (f"\nratio dpm/LIGGGHTS = {result['ratio']:.2f}" if result["ratio"] else ""))
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -106,11 +114,14 @@ def main():
     a = p.parse_args()
     lat = a.lattice or ((10, 10, 10) if a.quick else (20, 20, 25))
     steps = a.steps or (2000 if a.quick else 20000)
-    d = run_dpm(lat, steps)
+    d = run_dpm(lat, steps, threads=1)
+    d2 = run_dpm(lat, steps, threads=2) if numba.config.NUMBA_NUM_THREADS >= 2 else None
     lg = None if a.no_liggghts else run_liggghts(lat, steps)
+    lps = lg["particle_steps_per_s"] if lg else None
     result = {"scene": "box_settle", "lattice": lat, "machine": platform.processor()
-              or platform.machine(), "dpm": d, "liggghts": lg,
-              "ratio": d["particle_steps_per_s"] / lg["particle_steps_per_s"] if lg else None,
+              or platform.machine(), "cores": os.cpu_count(), "dpm": d, "dpm_2_threads": d2,
+              "liggghts": lg, "ratio": d["particle_steps_per_s"] / lps if lg else None,
+              "ratio_2_threads": d2["particle_steps_per_s"] / lps if lg and d2 else None,
               "mean_z_rel_diff": (d["mean_z_m"] / lg["mean_z_m"] - 1)
               if lg and lg["mean_z_m"] else None}
     RESULTS.mkdir(exist_ok=True)

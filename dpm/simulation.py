@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import time as _time
 import warnings
 from collections.abc import Sequence
@@ -54,9 +55,13 @@ class Simulation:
     overlap_tolerance : float
         Largest initial overlap / radius accepted at the first step.
     threads : int, optional
-        Threads of the step kernels. Default: one thread below ``SMALL_SCENE`` elements
-        (there the cost of starting parallel loops exceeds their gain), else numba's number
-        (all cores, or ``NUMBA_NUM_THREADS``). Results are identical for any number.
+        Threads of the step kernels, at most numba's ``NUMBA_NUM_THREADS`` (the cores).
+        Default: ``$DPM_THREADS`` if set, else 1 (as LIGGGHTS and Yade run one core unless
+        told otherwise: several runs side by side, or a shared machine, then do not
+        oversubscribe the cores, which stalls parallel loops badly). Scenes under
+        ``SMALL_SCENE`` elements always run on one thread unless ``threads`` is given (there
+        starting parallel loops costs more than it gains). Results are identical for any
+        number of threads.
 
     Order of one step (see :mod:`dpm.kernels.step`): integrator pre-force part, element
     positions, neighbour list (rebuilt when an element moved more than skin/2), gravity and
@@ -513,6 +518,8 @@ class Simulation:
             numba.set_num_threads(self.threads)
         elif len(self.elements) < SMALL_SCENE:
             numba.set_num_threads(1)
+        else:
+            numba.set_num_threads(_default_threads())
         try:
             self._run(nsteps, progress)
         finally:
@@ -661,6 +668,20 @@ class Simulation:
         spin = _to_body(b.orientation * np.array([1.0, -1.0, -1.0, -1.0]), spin_body)
         orbital = np.cross(b.position, b.mass[:, None] * b.velocity)
         return (orbital + spin).sum(axis=0)
+
+
+def _default_threads() -> int:
+    value = os.environ.get("DPM_THREADS", "1")
+    if value == "all":
+        return numba.config.NUMBA_NUM_THREADS
+    try:
+        n = int(value)
+    except ValueError:
+        raise ParameterError(f"DPM_THREADS={value!r} is not an integer or 'all'") from None
+    if not 1 <= n <= numba.config.NUMBA_NUM_THREADS:
+        raise ParameterError(f"DPM_THREADS={n} is outside [1, "
+                             f"{numba.config.NUMBA_NUM_THREADS}] (NUMBA_NUM_THREADS)")
+    return n
 
 
 def _quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
