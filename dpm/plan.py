@@ -67,7 +67,7 @@ def render(laws: list[tuple[str, str]], integrator_module: str) -> str:
     for k, (mod, fn) in enumerate(laws):
         lines.append(f"from {mod} import {fn} as law_{k}")
     lines.append(f"from {integrator_module} import pre_force_body, post_force_body")
-    lines += ["", "", "@jit",
+    lines += ["", "", "@inline_jit",
               "def pair_force(model, p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, "
               "dt, hist, k):",
               '    """Dispatch to the contact law ``model`` of this scene."""']

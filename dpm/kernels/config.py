@@ -20,6 +20,12 @@ N_HISTORY = 8
 
 jit = njit(**JIT)
 
+#: for the small functions called per body or per contact from the loops of the step
+#: (integrator parts, contact laws, the tangential spring): inlined into the loop at
+#: numba-IR level. Left to LLVM, a call passing a dozen arrays costs ~50 ns, more than the
+#: arithmetic of a body's update (measured: 77 ns -> 22 ns per body for velocity Verlet).
+inline_jit = njit(**JIT, inline="always")
+
 #: kernels whose outer loop is a ``prange``: each iteration writes only its own rows, so
 #: the result does not depend on the number of threads
 pjit = njit(**JIT, parallel=True)

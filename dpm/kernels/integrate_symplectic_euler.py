@@ -14,12 +14,11 @@ parallel loops over bodies: ``pre_force_body`` (before the forces of the step; i
 (after them).
 """
 
-from .config import jit
-from .quaternion import rotate_by_angular_velocity
-from .rigid_rotation import isotropic, rotate_quaternion_derivative
+from .config import inline_jit
+from .rigid_rotation import rotate_isotropic, rotate_quaternion_derivative
 
 
-@jit
+@inline_jit
 def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, vf, wf):
     """Forces see v_n and omega_n."""
     for d in range(3):
@@ -27,17 +26,33 @@ def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia
         wf[i, d] = angvel[i, d]
 
 
-@jit
+@inline_jit
 def post_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt):
     """Kick then drift with the new velocity."""
     im = invmass[i]
     for d in range(3):
         vel[i, d] += dt * force[i, d] * im
         pos[i, d] += dt * vel[i, d]
-    if isotropic(invinertia, i):
-        ii = invinertia[i, 0]
-        for d in range(3):
-            angvel[i, d] += dt * torque[i, d] * ii
-        rotate_by_angular_velocity(quat, i, angvel[i, 0], angvel[i, 1], angvel[i, 2], dt)
+    i0 = invinertia[i, 0]
+    i1 = invinertia[i, 1]
+    i2 = invinertia[i, 2]
+    q0 = quat[i, 0]
+    q1 = quat[i, 1]
+    q2 = quat[i, 2]
+    q3 = quat[i, 3]
+    if i0 == i1 and i1 == i2:
+        wx = angvel[i, 0] + dt * torque[i, 0] * i0
+        wy = angvel[i, 1] + dt * torque[i, 1] * i0
+        wz = angvel[i, 2] + dt * torque[i, 2] * i0
+        q0, q1, q2, q3 = rotate_isotropic(q0, q1, q2, q3, wx, wy, wz, dt)
     else:
-        rotate_quaternion_derivative(quat, angvel, torque, invinertia, i, dt)
+        q0, q1, q2, q3, wx, wy, wz = rotate_quaternion_derivative(
+            q0, q1, q2, q3, angvel[i, 0], angvel[i, 1], angvel[i, 2], torque[i, 0],
+            torque[i, 1], torque[i, 2], i0, i1, i2, dt)
+    angvel[i, 0] = wx
+    angvel[i, 1] = wy
+    angvel[i, 2] = wz
+    quat[i, 0] = q0
+    quat[i, 1] = q1
+    quat[i, 2] = q2
+    quat[i, 3] = q3

@@ -14,11 +14,11 @@ pair_params row: [E*, G*, A, mu, zeta_t, (rolling), rolling model, mu_r]
 
 import math
 
-from .config import jit
+from .config import inline_jit
 from .tangential import spring_coulomb
 
 
-@jit
+@inline_jit
 def hertz_brilliantov(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
     """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
     a = math.sqrt(reff * delta)

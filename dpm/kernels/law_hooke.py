@@ -12,11 +12,11 @@ pair_params row: [E*, zeta, mu, kappa, zeta_t, (rolling), rolling model, mu_r]
 
 import math
 
-from .config import jit
+from .config import inline_jit
 from .tangential import spring_coulomb
 
 
-@jit
+@inline_jit
 def hooke(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
     """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
     kn = 4.0 / 3.0 * p[0] * reff

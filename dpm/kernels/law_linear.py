@@ -16,11 +16,11 @@ pair_params row: [k_n, zeta, mu, kappa, zeta_t, 0, rolling model, mu_r]
 
 import math
 
-from .config import jit
+from .config import inline_jit
 from .tangential import spring_coulomb
 
 
-@jit
+@inline_jit
 def linear_spring_dashpot(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
     """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
     kn = p[0]

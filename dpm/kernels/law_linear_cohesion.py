@@ -14,13 +14,13 @@ pair_params row: [E*, G*, beta, mu, k_c, (rolling), rolling model, mu_r]
 
 import math
 
-from .config import jit
+from .config import inline_jit
 from .tangential import spring_coulomb
 
 SQRT_5_6 = math.sqrt(5.0 / 6.0)
 
 
-@jit
+@inline_jit
 def linear_cohesion(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
     """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
     a = math.sqrt(reff * delta)

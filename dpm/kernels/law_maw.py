@@ -15,11 +15,11 @@ pair_params row: [C, zeta, mu, kappa, zeta_t, (rolling), rolling model, mu_r]
 
 import math
 
-from .config import jit
+from .config import inline_jit
 from .tangential import spring_coulomb
 
 
-@jit
+@inline_jit
 def maw_linear_spring(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
     """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
     kn = p[0] * reff**0.4 * meff**0.2

@@ -22,14 +22,14 @@ the spring also resists twisting, as model 1 does.
 
 import math
 
-from .config import jit
+from .config import inline_jit
 
 ROLLING_NONE = 0
 ROLLING_CONSTANT_TORQUE = 1
 ROLLING_EPSD = 2
 
 
-@jit
+@inline_jit
 def rolling_torque(p, fn, reff, meff, wx, wy, wz, dt, hist, k):
     """Torque (x, y, z) on element i's body from rolling resistance; j gets the opposite."""
     model = int(p[6])

@@ -31,7 +31,7 @@ import math
 
 from numba import prange
 
-from .config import step_jit as jit, step_pjit as pjit
+from .config import inline_jit, step_jit as jit, step_pjit as pjit
 from .neighbours import build_neighbour_list, build_wall_list
 from .quaternion import rotate_vector
 from .rolling import rolling_torque
@@ -42,7 +42,7 @@ from .law_hertz_mindlin import hertz_mindlin as law_1
 from .integrate_velocity_verlet import pre_force_body, post_force_body
 
 
-@jit
+@inline_jit
 def pair_force(model, p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
     """Dispatch to the contact law ``model`` of this scene."""
     if model == 0:
@@ -57,7 +57,7 @@ STATUS_OVERLAP = 3
 STATUS_WALL_OVERFLOW = 4
 
 
-@jit
+@inline_jit
 def place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos):
     """x_e = X_b + R(q_b) offset_e for the elements of body b."""
     for e in range(b_estart[b], b_estart[b + 1]):

@@ -12,10 +12,10 @@ oblique-impact tests of tests/test_impact_models.py fail with it.)
 
 import math
 
-from .config import jit
+from .config import inline_jit
 
 
-@jit
+@inline_jit
 def spring_coulomb(kt, ct, mu, fn, vtx, vty, vtz, nx, ny, nz, dt, hist, k):
     """Tangential spring-dashpot with history in ``hist[k, 0:3]`` and Coulomb limit.
 
