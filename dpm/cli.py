@@ -62,6 +62,14 @@ def _cmd_xdmf(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_shapes(args: argparse.Namespace) -> int:
+    from .shapes.metrics import report_table
+
+    res = None if args.resolutions is None else [float(x) for x in args.resolutions.split(",")]
+    print(report_table(args.shapes, res, samples=args.samples))
+    return 0
+
+
 def _cmd_clear_cache(args: argparse.Namespace) -> int:
     from .plan import clear_cache
 
@@ -85,6 +93,13 @@ def main(argv: list[str] | None = None) -> int:
     x = sub.add_parser("xdmf", help="(re)write the XDMF sidecar of an HDF5 run")
     x.add_argument("run")
     x.set_defaults(func=_cmd_xdmf)
+    s = sub.add_parser("shapes", help="sphere count, volume and surface error of shapes at "
+                       "several resolutions")
+    s.add_argument("shapes", nargs="+", help="registered name (cylinder, 'block:a=4e-3,b=2e-3'),"
+                   " library name (rock) or mesh file (grain.stl:scale=1e-3)")
+    s.add_argument("--resolutions", default=None, help="comma-separated, e.g. 0.1,0.3,0.6")
+    s.add_argument("--samples", type=int, default=4000, help="surface samples per shape")
+    s.set_defaults(func=_cmd_shapes)
     sub.add_parser("clear-cache", help="delete compiled kernels and generated step modules"
                    ).set_defaults(func=_cmd_clear_cache)
     args = p.parse_args(argv)
