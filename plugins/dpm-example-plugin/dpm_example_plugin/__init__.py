@@ -1,0 +1,1 @@
+"""Example dpm plugin package."""
