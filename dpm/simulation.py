@@ -431,8 +431,8 @@ class Simulation:
         if self._spheres_only:
             e.position = b.position
         if len(self.contacts.start) != n_el + 1:
-            self.contacts.reset(n_el, 8 * n_el)
-            self.wall_contacts.reset(n_el, n_el)
+            self.contacts.reset(n_el, 4 * n_el)  # grows on demand
+            self.wall_contacts.reset(n_el, n_el // 4 + 16)
         self._e_worst = np.zeros(n_el)
         self._vf = np.zeros((len(b), 3))  # velocities the forces see (set by the integrator)
         self._wf = np.zeros((len(b), 3))

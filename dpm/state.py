@@ -103,7 +103,7 @@ class _CsrList:
         """Enlarge the buffers to hold ``needed`` entries (with headroom); keep the list."""
         n = self.count
         old = (self.key, self.history, self.active)
-        self._allocate(int(needed * 1.5) + 16)
+        self._allocate(int(needed * 1.25) + 16)
         for new, o in zip((self.key, self.history, self.active), old, strict=True):
             new[:n] = o[:n]
 
