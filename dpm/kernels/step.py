@@ -33,7 +33,7 @@ from numba import prange
 
 from .config import inline_jit, step_jit as jit, step_pjit as pjit
 from .neighbours import build_neighbour_list, build_wall_list
-from .quaternion import rotate_vector
+from .rigid_rotation import rotate
 from .rolling import rolling_torque
 
 # --- bindings begin (dpm.plan rewrites this block) ---
@@ -61,7 +61,8 @@ STATUS_WALL_OVERFLOW = 4
 def place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos):
     """x_e = X_b + R(q_b) offset_e for the elements of body b."""
     for e in range(b_estart[b], b_estart[b + 1]):
-        ox, oy, oz = rotate_vector(b_quat, b, e_offset[e, 0], e_offset[e, 1], e_offset[e, 2])
+        ox, oy, oz = rotate(b_quat[b, 0], b_quat[b, 1], b_quat[b, 2], b_quat[b, 3],
+                            e_offset[e, 0], e_offset[e, 1], e_offset[e, 2])
         e_pos[e, 0] = b_pos[b, 0] + ox
         e_pos[e, 1] = b_pos[b, 1] + oy
         e_pos[e, 2] = b_pos[b, 2] + oz
