@@ -135,9 +135,11 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
             rj = e_radius[j]
             rs = ri + rj
             d2 = dx * dx + dy * dy + dz * dz
-            bj = e_owner[j]
-            ims = b_invmass[bi] + b_invmass[bj]
-            if d2 >= rs * rs or ims == 0.0:
+            ims = 0.0
+            if d2 < rs * rs:  # only touching pairs read the partner's body
+                bj = e_owner[j]
+                ims = b_invmass[bi] + b_invmass[bj]
+            if ims == 0.0:
                 if nl_active[kk]:
                     for c in range(nh):
                         nl_hist[kk, c] = 0.0
