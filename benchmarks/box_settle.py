@@ -99,8 +99,13 @@ def plot(result, path):
     ax.bar_label(bars, labels=[f"{v:.3g}" for v in vals])
     ax.set_ylabel("particle-steps per second")
     n, s = result["dpm"]["particles"], result["dpm"]["steps"]
-    ax.set_title(f"box_settle, {n} spheres, {s} steps"
-                 + (f"\nratio dpm/LIGGGHTS = {result['ratio']:.2f}" if result["ratio"] else ""))
+    ratios = ""
+    if result["ratio"]:
+        ratios = f"\ndpm/LIGGGHTS: {result['ratio']:.2f} (1 thread)"
+        if result["ratio_2_threads"]:
+            ratios += f", {result['ratio_2_threads']:.2f} (2 threads)"
+    ax.set_title(f"box_settle, {n} spheres, {s} steps{ratios}")
+    ax.margins(y=0.15)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
 
