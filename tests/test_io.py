@@ -123,3 +123,30 @@ def test_unstable_run_keeps_frames_and_says_why(tmp_path):
     run = dpm.load(path)
     assert run.n_frames >= 1
     assert np.all(np.isfinite(run.frame(-1)["position"]))
+
+
+def test_clustered_bodies_write_their_elements(tmp_path):
+    sim = dpm.Simulation(dt=2e-6, gravity=(0, 0, -9.81))
+    m = dpm.Material("glass", density=2500, young=5e6, poisson=0.45)
+    sim.contact(m, m, model="hertz_mindlin", restitution=0.3, friction=0.5)
+    sim.add_boundary("plane", material=m)
+    sim.add_particles("cylinder", material=m, r=1e-3, l=3e-3, resolution=0.1,
+                      positions=[[0, 0, 2e-3], [5e-3, 0, 2e-3]])
+    path = tmp_path / "clusters.h5"
+    sim.output(str(path), every_steps=100)
+    sim.run(steps=200, progress=False)
+    sim.close()
+    run = dpm.load(path)
+    el = run.elements(-1)
+    np.testing.assert_array_equal(el["position"], sim.elements.position)
+    np.testing.assert_array_equal(el["radius"], sim.elements.radius)
+    assert set(el["body_id"]) == {0, 1} and len(el["radius"]) == len(sim.elements)
+    # each element sits at its body's pose: x = X + R(q) offset
+    b = sim.bodies
+    owner = sim.elements.owner
+    world = dpm.simulation._to_body(b.orientation[owner] * [1, -1, -1, -1],
+                                    sim.elements.offset)
+    np.testing.assert_allclose(el["position"], b.position[owner] + world, atol=1e-15)
+    root = ET.parse(path.with_suffix(".elements.xdmf")).getroot()
+    assert len(root.findall(".//Grid[@GridType='Uniform']")) == 3
+    assert "/elements/position" in ET.tostring(root, encoding="unicode")

@@ -32,6 +32,8 @@ FIELDS = {
     "mass": (0, "f8", "mass"),
     "material": (0, "i4", "material"),
 }
+#: per-element fields of clustered bodies: name -> (width, dtype)
+ELEMENT_FIELDS = {"position": (3, "f8"), "radius": (0, "f8"), "body_id": (0, "i8")}
 XDMF_INTERVAL_S = 5.0
 
 
@@ -60,8 +62,18 @@ class Writer:
             maxshape = (None, width) if width else (None,)
             chunk = (min(n_guess, 65536), width) if width else (min(n_guess, 65536),)
             g.create_dataset(name, shape=shape, maxshape=maxshape, dtype=dtype, chunks=chunk)
+        # sphere elements of clustered bodies (empty when every body is one sphere)
+        self.clusters = not getattr(sim, "_spheres_only", True)
+        m_guess = max(len(sim.elements), 1)
+        eg = f.create_group("elements")
+        for name, (width, dtype) in ELEMENT_FIELDS.items():
+            shape = (0, width) if width else (0,)
+            maxshape = (None, width) if width else (None,)
+            chunk = (min(m_guess, 65536), width) if width else (min(m_guess, 65536),)
+            eg.create_dataset(name, shape=shape, maxshape=maxshape, dtype=dtype, chunks=chunk)
         fr = f.create_group("frames")
-        for name, dtype in (("time", "f8"), ("step", "i8"), ("start", "i8"), ("count", "i8")):
+        for name, dtype in (("time", "f8"), ("step", "i8"), ("start", "i8"), ("count", "i8"),
+                            ("element_start", "i8"), ("element_count", "i8")):
             fr.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(1024,))
         nb = max(len(sim.boundaries), 1)
         bg = f.create_group("boundaries")
@@ -71,6 +83,7 @@ class Writer:
         f.swmr_mode = True
         self.frames = 0
         self.rows = 0
+        self.element_rows = 0
         self._last_xdmf = 0.0
 
     def write(self, sim: Simulation) -> None:
@@ -91,11 +104,22 @@ class Writer:
             for k, bd in enumerate(sim.boundaries):
                 vals[k] = getattr(bd, name)
             ds[self.frames] = vals
+        m = len(sim.elements) if self.clusters else 0
+        if m:
+            e = sim.elements
+            eg = self.file["elements"]
+            values = {"position": e.position, "radius": e.radius, "body_id": b.id[e.owner]}
+            for name in ELEMENT_FIELDS:
+                ds = eg[name]
+                ds.resize(self.element_rows + m, axis=0)
+                ds[self.element_rows:self.element_rows + m] = values[name]
         fr = self.file["frames"]
-        for name, value in (("step", sim.step_count), ("start", self.rows), ("count", n)):
+        for name, value in (("step", sim.step_count), ("start", self.rows), ("count", n),
+                            ("element_start", self.element_rows), ("element_count", m)):
             fr[name].resize(self.frames + 1, axis=0)
             fr[name][self.frames] = value
         self.rows += n
+        self.element_rows += m
         # the frame count is the length of /frames/time: extended last
         fr["time"].resize(self.frames + 1, axis=0)
         fr["time"][self.frames] = sim.time
@@ -112,6 +136,10 @@ class Writer:
         fr = self.file["frames"]
         write_xdmf_from_arrays(self.path, fr["time"][:], fr["start"][:], fr["count"][:],
                                self.rows)
+        if self.clusters:
+            write_xdmf_from_arrays(self.path, fr["time"][:], fr["element_start"][:],
+                                   fr["element_count"][:], self.element_rows,
+                                   group="elements")
 
     def flush(self) -> None:
         if self.file.id.valid:
@@ -161,6 +189,15 @@ class Run:
         out["time"] = float(self.times[k])
         out["step"] = int(self.steps[k])
         return out
+
+    def elements(self, k: int) -> dict[str, np.ndarray]:
+        """Sphere elements of frame k (clustered bodies): position, radius, body_id; empty
+        arrays when every body is a single sphere."""
+        k = k % len(self)
+        with _open(self.path) as f:
+            fr = f["frames"]
+            a, n = int(fr["element_start"][k]), int(fr["element_count"][k])
+            return {name: f["elements"][name][a:a + n] for name in ELEMENT_FIELDS}
 
     def field(self, name: str) -> list[np.ndarray]:
         if name not in FIELDS:

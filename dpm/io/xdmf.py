@@ -18,7 +18,7 @@ _ATTRS = {
 
 
 def _slab(h5name: str, field: str, start: int, count: int, width: int, rows: int,
-          ntype: str, prec: int) -> str:
+          ntype: str, prec: int, group: str = "particles") -> str:
     if width:
         dims, sel, full = f"{count} {width}", f"{start} 0 1 1 {count} {width}", f"{rows} {width}"
         ndim = 2
@@ -28,29 +28,35 @@ def _slab(h5name: str, field: str, start: int, count: int, width: int, rows: int
     return (f'<DataItem ItemType="HyperSlab" Dimensions="{dims}" Type="HyperSlab">'
             f'<DataItem Dimensions="3 {ndim}" Format="XML">{sel}</DataItem>'
             f'<DataItem Dimensions="{full}" NumberType="{ntype}" Precision="{prec}" '
-            f'Format="HDF">{h5name}:/particles/{field}</DataItem></DataItem>')
+            f'Format="HDF">{h5name}:/{group}/{field}</DataItem></DataItem>')
 
 
-def write_xdmf_from_arrays(h5path: Path, times, starts, counts, rows: int) -> Path:
-    """Write ``<run>.xdmf`` beside ``h5path`` for the given frame table."""
+_ELEMENT_ATTRS = {"radius": (0, "Float", 8), "body_id": (0, "Int", 8)}
+
+
+def write_xdmf_from_arrays(h5path: Path, times, starts, counts, rows: int,
+                           group: str = "particles") -> Path:
+    """Write ``<run>.xdmf`` (particles) or ``<run>.elements.xdmf`` (the sphere elements of
+    clustered bodies, ``group="elements"``) beside ``h5path`` for the given frame table."""
     h5path = Path(h5path)
     name = h5path.name
+    attrs = _ATTRS if group == "particles" else _ELEMENT_ATTRS
     out = ['<?xml version="1.0" ?>', '<Xdmf Version="3.0"><Domain>',
-           '<Grid Name="particles" GridType="Collection" CollectionType="Temporal">']
+           f'<Grid Name="{group}" GridType="Collection" CollectionType="Temporal">']
     for t, a, n in zip(times, starts, counts, strict=True):
         a, n = int(a), int(n)
         out.append(f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
                    f'<Topology TopologyType="Polyvertex" NumberOfElements="{n}"/>'
                    f'<Geometry GeometryType="XYZ">'
-                   f'{_slab(name, "position", a, n, 3, rows, "Float", 8)}</Geometry>')
-        for field, (w, ntype, prec) in _ATTRS.items():
+                   f'{_slab(name, "position", a, n, 3, rows, "Float", 8, group)}</Geometry>')
+        for field, (w, ntype, prec) in attrs.items():
             kind = {0: "Scalar", 3: "Vector", 4: "Matrix"}[w]
             out.append(f'<Attribute Name="{field}" AttributeType="{kind}" Center="Node">'
-                       f'{_slab(name, field, a, n, w, rows, ntype, prec)}</Attribute>')
+                       f'{_slab(name, field, a, n, w, rows, ntype, prec, group)}</Attribute>')
         out.append("</Grid>")
     out.append("</Grid></Domain></Xdmf>")
-    path = h5path.with_suffix(".xdmf")
-    tmp = path.with_suffix(".xdmf.tmp")
+    path = h5path.with_suffix(".xdmf" if group == "particles" else ".elements.xdmf")
+    tmp = path.with_name(path.name + ".tmp")
     tmp.write_text("\n".join(out))
     tmp.replace(path)
     return path
@@ -60,5 +66,9 @@ def write_xdmf(h5path: str | Path) -> Path:
     """(Re)write the XDMF sidecar of an existing dpm HDF5 run."""
     with h5py.File(h5path, "r", libver="latest", swmr=True) as f:
         n = len(f["frames/time"])
+        if "elements" in f and len(f["elements/radius"]):
+            write_xdmf_from_arrays(Path(h5path), f["frames/time"][:n],
+                                   f["frames/element_start"][:n], f["frames/element_count"][:n],
+                                   len(f["elements/radius"]), group="elements")
         return write_xdmf_from_arrays(Path(h5path), f["frames/time"][:n], f["frames/start"][:n],
                                       f["frames/count"][:n], len(f["particles/id"]))
