@@ -5,12 +5,11 @@ from __future__ import annotations
 import math
 
 from ..material import effective_young
-from ..parameters import Parameter
-from .base import COMMON, ImpactModel
-from .linear import cutoff_contact_time, damping_ratio_for_restitution
+from .base import COMMON
+from .linear import TANGENTIAL, LinearSpringDashpot, cutoff_contact_time
 
 
-class Hooke(ImpactModel):
+class Hooke(LinearSpringDashpot):
     """Linear spring-dashpot with k_n = 4/3 E* R* from the elastic constants (Hooke).
 
     DPM thesis Samiei 2012 §2.6.3, eq. 2.36 (ERRATA: R*, not sqrt(R*)).
@@ -31,24 +30,11 @@ class Hooke(ImpactModel):
     name = "hooke"
     kernel = ("dpm.kernels.law_hooke", "hooke")
     needs_elastic_constants = True
-    parameters = {
-        **COMMON,
-        "tangential_stiffness_ratio": Parameter(default=2.0 / 7.0, low=0.0, doc="k_t / k_n"),
-        "tangential_damping_ratio": Parameter(default=None, low=0.0,
-                                              doc="zeta_t (default: normal zeta)"),
-    }
-
-    @property
-    def damping_ratio(self) -> float:
-        return damping_ratio_for_restitution(float(self.params["restitution"]))
+    parameters = {**COMMON, **TANGENTIAL}
 
     def pair_row(self, a, b, context):
-        zeta = self.damping_ratio
-        zt = self.params["tangential_damping_ratio"]
         es = effective_young(a, b)
-        return self._row(es, zeta, self.params["friction"],
-                         self.params["tangential_stiffness_ratio"],
-                         zeta if zt is None else zt, stiffness=4.0 / 3.0 * es * context.reff)
+        return self.linear_row(4.0 / 3.0 * es * context.reff, es)
 
     def contact_time(self, a, b, meff, reff, speed):
         kn = 4.0 / 3.0 * effective_young(a, b) * reff

@@ -53,6 +53,14 @@ def damping_ratio_for_restitution(restitution: float) -> float:
                   rtol=1e-14)
 
 
+#: the tangential parameters of the linear-spring family
+TANGENTIAL = {
+    "tangential_stiffness_ratio": Parameter(default=2.0 / 7.0, low=0.0, doc="k_t / k_n"),
+    "tangential_damping_ratio": Parameter(default=None, low=0.0,
+                                          doc="zeta_t (default: normal zeta)"),
+}
+
+
 class LinearSpringDashpot(ImpactModel):
     """Linear spring-dashpot (Cundall & Strack 1979; DPM thesis Samiei 2012, §2.6.1).
 
@@ -75,22 +83,23 @@ class LinearSpringDashpot(ImpactModel):
     parameters = {
         **COMMON,
         "stiffness": Parameter(low=0.0, low_open=True, unit="N/m", doc="normal stiffness k_n"),
-        "tangential_stiffness_ratio": Parameter(default=2.0 / 7.0, low=0.0,
-                                                doc="k_t / k_n"),
-        "tangential_damping_ratio": Parameter(default=None, low=0.0,
-                                              doc="zeta_t (default: normal zeta)"),
+        **TANGENTIAL,
     }
 
     @property
     def damping_ratio(self) -> float:
         return damping_ratio_for_restitution(float(self.params["restitution"]))
 
-    def pair_row(self, a, b, context):
+    def linear_row(self, kn: float, kernel_k: float):
+        """Pair row [kernel_k, zeta, mu, kappa, zeta_t] for the normal stiffness kn."""
         zeta = self.damping_ratio
         zt = self.params["tangential_damping_ratio"]
-        return self._row(self.params["stiffness"], zeta, self.params["friction"],
+        return self._row(kernel_k, zeta, self.params["friction"],
                          self.params["tangential_stiffness_ratio"],
-                         zeta if zt is None else zt, stiffness=self.params["stiffness"])
+                         zeta if zt is None else zt, stiffness=kn)
+
+    def pair_row(self, a, b, context):
+        return self.linear_row(self.params["stiffness"], self.params["stiffness"])
 
     def contact_time(self, a, b, meff, reff, speed):
         return cutoff_contact_time(self.damping_ratio, math.sqrt(self.params["stiffness"] / meff))
