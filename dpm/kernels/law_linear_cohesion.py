@@ -15,21 +15,14 @@ pair_params row: [E*, G*, beta, mu, k_c, (rolling), rolling model, mu_r]
 import math
 
 from .config import inline_jit
-from .tangential import spring_coulomb
-
-SQRT_5_6 = math.sqrt(5.0 / 6.0)
+from .law_hertz_mindlin import hertz_mindlin
 
 
 @inline_jit
 def linear_cohesion(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
-    """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
-    a = math.sqrt(reff * delta)
-    kn = 4.0 / 3.0 * p[0] * a
-    cn = 2.0 * SQRT_5_6 * p[2] * math.sqrt(2.0 * p[0] * a * meff)
-    frep = kn * delta + cn * ddelta
-    if frep < 0.0:
-        frep = 0.0
-    kt = 8.0 * p[1] * a
-    ct = 2.0 * SQRT_5_6 * p[2] * math.sqrt(kt * meff)
-    ftx, fty, ftz = spring_coulomb(kt, ct, p[3], frep, vtx, vty, vtz, nx, ny, nz, dt, hist, k)
+    """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``:
+    the Hertz-Mindlin force (friction limited by its repulsive part) minus the cohesion
+    p[4] pi R* delta."""
+    frep, ftx, fty, ftz = hertz_mindlin(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff,
+                                        reff, dt, hist, k)
     return frep - p[4] * math.pi * reff * delta, ftx, fty, ftz
