@@ -1,0 +1,72 @@
+"""Where one step's time goes: the passes of the step kernel timed one by one, 1 thread.
+
+Builds the dilute or dense box of benchmarks/scaling.py (k^3 spheres), runs 50 steps, then
+times (microseconds per step) the whole step and its parts: ``begin`` (integrator pre-force
+part and element displacements), ``contact`` (contact pass), ``sum`` (per-body sums and
+integrator post-force part), and one neighbour-list ``rebuild``. The figures in
+benchmarks/NOTES.md come from this script.
+
+    python benchmarks/profile_step.py 22 dense
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numba
+from scaling import CASES, D, scene_arrays  # noqa: I001  (run from benchmarks/)
+
+import dpm
+
+
+def timed(fn, reps: int) -> float:
+    fn()
+    t = time.perf_counter()
+    for _ in range(reps):
+        fn()
+    return (time.perf_counter() - t) / reps * 1e6
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("k", type=int, nargs="?", default=22, help="lattice edge (k^3 spheres)")
+    p.add_argument("case", nargs="?", default="dense", choices=list(CASES))
+    a = p.parse_args()
+    numba.set_num_threads(1)
+    pos, vel, box = scene_arrays(a.k, a.case)
+    sim = dpm.Simulation(dt=1e-5, gravity=(0, 0, CASES[a.case][2]), threads=1)
+    g = dpm.Material("glass", density=2500, young=5e6, poisson=0.45)
+    sim.contact(g, g, model="hertz_mindlin", restitution=0.3, friction=0.5)
+    sim.add_boundary("box", material=g, lower=(0, 0, 0), upper=box, open="+z")
+    sim.add_particles("sphere", material=g, radius=D / 2, positions=pos, velocities=vel)
+    sim.run(steps=50, progress=False)
+    m, args, dt = sim._module, sim._args(), sim.dt
+    b, e, c, wc, w = sim.bodies, sim.elements, sim.contacts, sim.wall_contacts, sim.walls
+    n = len(b)
+    step = timed(lambda: m.run_steps(100, dt, *args), 5) / 100
+    begin = timed(lambda: m.begin_step(
+        0.0, False, b.position, b.velocity, b.orientation, b.angular_velocity, b.force,
+        b.torque, b.invmass, b.invinertia, sim._vf, sim._wf, b.element_start, e.offset,
+        e.position, e.reference, sim._e_worst), 200)
+    contact = timed(lambda: m.contact_pass(
+        0.0, b.position, sim._vf, sim._wf, b.mass, b.invmass, e.owner, e.radius, e.material,
+        e.position, c.start, c.key, c.history, c.active, c.force, wc.start, wc.key,
+        wc.history, wc.active, wc.force, w.point, w.normal, w.velocity, w.material,
+        sim._pair_model, sim._pair_params, sim._e_worst, sim._e_count), 200)
+    summed = timed(lambda: m.sum_pass(
+        0.0, False, sim.gravity, b.position, b.velocity, b.orientation, b.angular_velocity,
+        b.force, b.torque, b.mass, b.invmass, b.invinertia, b.element_start, c.start,
+        c.active, c.force, c.t_start, c.t_pair, wc.start, wc.active, wc.force), 200)
+    rebuild = timed(lambda: m.rebuild(
+        sim.skin, e.owner, e.radius, e.position, e.reference, c.start, c.key, c.history,
+        c.active, c.new_start, c.new_key, c.new_history, c.new_active, c.t_start, c.t_pair,
+        wc.start, wc.key, wc.history, wc.active, wc.new_start, wc.new_key, wc.new_history,
+        wc.new_active, w.point, w.normal, sim._diag), 10)
+    print(f"{a.case} box, {n} spheres, {c.count} listed pairs, {int(sim._diag[6])} touching; "
+          f"us per step: step {step:.0f} | begin {begin:.0f} ({begin / n * 1e3:.0f} ns per "
+          f"body) | contact {contact:.0f} | sum {summed:.0f} | one rebuild {rebuild:.0f}")
+
+
+if __name__ == "__main__":
+    main()
