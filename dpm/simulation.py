@@ -436,6 +436,7 @@ class Simulation:
         self._e_worst = np.zeros(n_el)
         self._vf = np.zeros((len(b), 3))  # velocities the forces see (set by the integrator)
         self._wf = np.zeros((len(b), 3))
+        self._aux = np.zeros((len(b), self.integrator.aux_columns))
         self._e_count = np.zeros(n_el, np.int64)
         if not self._spheres_only:
             self._module.update_element_positions(b.position, b.orientation, b.element_start,
@@ -468,7 +469,8 @@ class Simulation:
         b, e, c, wc, w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
         return (self.gravity, self.skin, self.max_overlap, not self._spheres_only,
                 b.position, b.velocity, b.orientation, b.angular_velocity, b.force, b.torque,
-                b.mass, b.invmass, b.invinertia, self._vf, self._wf, b.element_start, e.owner,
+                b.mass, b.invmass, b.invinertia, self._vf, self._wf, self._aux, b.element_start,
+                e.owner,
                 e.offset, e.radius,
                 e.material, e.position, e.reference, c.start, c.key, c.history, c.active,
                 c.force, c.new_start, c.new_key, c.new_history, c.new_active, c.t_start,
@@ -484,7 +486,7 @@ class Simulation:
         self._wf[:] = b.angular_velocity
         self._module.compute_forces(
             0.0, False, self.gravity, b.position, b.velocity, b.orientation, b.angular_velocity,
-            b.force, b.torque, b.mass, b.invmass, b.invinertia, self._vf, self._wf,
+            b.force, b.torque, b.mass, b.invmass, b.invinertia, self._vf, self._wf, self._aux,
             b.element_start, e.owner,
             e.radius, e.material, e.position,
             c.start, c.key, c.history, c.active, c.force, c.t_start, c.t_pair, wc.start,
@@ -529,6 +531,7 @@ class Simulation:
         if not self._forces_valid:
             self._prime_forces()
             self._update_boundary_loads()
+            self.integrator.start(self)
         from .progress import Progress
 
         hooks = self._registry.manager.hook
@@ -574,7 +577,11 @@ class Simulation:
         d = self._diag
         total = 0
         while total < n:
-            self._module.run_steps(n - total, self.dt, *self._args())
+            if self.integrator.implicit:
+                d[0] = STATUS_OK
+                d[1] = self.integrator.advance(self, n - total)
+            else:
+                self._module.run_steps(n - total, self.dt, *self._args())
             ran = int(d[1])
             if d[0] in (STATUS_OVERFLOW, STATUS_WALL_OVERFLOW):
                 # stopped after begin_step: grow, then finish that step

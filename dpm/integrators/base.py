@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar
 
 
 class Integrator:
@@ -10,16 +10,35 @@ class Integrator:
 
     Subclass it and set ``kernel_module`` to a module defining two numba functions
     ``pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt,
-    vf, wf)`` and ``post_force_body(i, ..., dt)`` that advance body ``i``; the step calls
+    vf, wf, aux)`` and ``post_force_body(i, ..., dt, aux)`` that advance body ``i``; the step calls
     them inside its parallel loops over bodies, before and after the force evaluation.
     ``pre_force_body`` also writes ``vf[i]``, ``wf[i]``: the velocity and angular velocity
     that velocity-dependent forces of this step see.
+    ``aux[i]`` is a row of ``aux_columns`` floats per body that the integrator keeps
+    between steps (e.g. the higher derivatives of a Gear predictor-corrector); it starts at
+    zero and :meth:`start` may fill it once the forces of the initial state are known.
     ``order`` is the global order of accuracy for smooth forces.
+
+    An implicit integrator sets ``implicit = True`` and overrides :meth:`advance`, which
+    then replaces the explicit kernel loop: it advances the simulation's state arrays
+    ``n`` steps itself.
     """
 
     name: ClassVar[str] = ""
     kernel_module: ClassVar[str] = ""
     order: ClassVar[int] = 1
+    aux_columns: ClassVar[int] = 0
+    implicit: ClassVar[bool] = False
+
+    def start(self, sim: Any) -> None:
+        """Called once before the first step, after the initial forces are computed
+        (``sim.bodies.force``/``torque`` hold them) and ``sim._aux`` is allocated."""
+
+    def advance(self, sim: Any, n: int) -> int:
+        """Implicit integrators only: advance ``n`` steps of ``sim``; return the number
+        of steps done (fewer only when the run must stop, with ``sim._diag[0]`` set)."""
+        raise NotImplementedError(f"{type(self).__name__} is explicit: the step kernels "
+                                  "advance it")
 
 
 class SymplecticEuler(Integrator):

@@ -19,7 +19,7 @@ from .rigid_rotation import rotate_isotropic, rotate_quaternion_derivative
 
 
 @inline_jit
-def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, vf, wf):
+def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, vf, wf, aux):
     """Forces see v_n and omega_n."""
     for d in range(3):
         vf[i, d] = vel[i, d]
@@ -27,7 +27,7 @@ def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia
 
 
 @inline_jit
-def post_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt):
+def post_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, aux):
     """Kick then drift with the new velocity."""
     im = invmass[i]
     for d in range(3):

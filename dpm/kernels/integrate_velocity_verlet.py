@@ -23,7 +23,7 @@ from .rigid_rotation import kick, kick_and_rotate_dlm, rotate_isotropic
 
 
 @inline_jit
-def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, vf, wf):
+def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, vf, wf, aux):
     """Half kick and drift; predicted velocities for the forces."""
     h = 0.5 * dt
     im = invmass[i]
@@ -68,7 +68,7 @@ def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia
 
 
 @inline_jit
-def post_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt):
+def post_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, aux):
     """Second half kick."""
     h = 0.5 * dt
     im = invmass[i]

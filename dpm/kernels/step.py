@@ -77,13 +77,13 @@ def update_element_positions(b_pos, b_quat, b_estart, e_offset, e_pos):
 
 @pjit
 def begin_step(dt, update_elements, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
-               b_invmass, b_invinertia, b_vf, b_wf, b_estart, e_offset, e_pos, e_ref, e_d2):
+               b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_offset, e_pos, e_ref, e_d2):
     """Steps 1-2 per body: integrator pre-force part (which also sets the velocities the
     forces are evaluated with, b_vf and b_wf), element positions, and each element's squared
     displacement since the last rebuild (e_d2)."""
     for b in prange(b_pos.shape[0]):
         pre_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
-                       b_invinertia, dt, b_vf, b_wf)
+                       b_invinertia, dt, b_vf, b_wf, b_aux)
         if update_elements:
             place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos)
         for e in range(b_estart[b], b_estart[b + 1]):
@@ -271,7 +271,7 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
 
 @pjit
 def sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass,
-             b_invmass, b_invinertia, b_estart, nl_start, nl_active, nl_f, t_start, t_pair,
+             b_invmass, b_invinertia, b_aux, b_estart, nl_start, nl_active, nl_f, t_start, t_pair,
              wl_start, wl_active, wl_f):
     """Pass b: gravity plus the stored contact rows of each body's elements in a fixed
     order; then (if ``integrate``) step 5, the integrator's post-force part, for that body."""
@@ -317,12 +317,12 @@ def sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_
         b_torque[b, 2] = tz
         if integrate:
             post_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
-                            b_invinertia, dt)
+                            b_invinertia, dt, b_aux)
 
 
 @jit
 def compute_forces(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
-                   b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_estart, e_owner, e_radius,
+                   b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner, e_radius,
                    e_mat, e_pos,
                    nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair, wl_start, wl_w,
                    wl_hist, wl_active, wl_f, w_point, w_normal, w_vel, w_mat, w_force,
@@ -339,7 +339,7 @@ def compute_forces(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_for
                  wl_active, wl_f, w_point, w_normal, w_vel, w_mat, pair_model, pair_params,
                  e_worst, e_count)
     sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass,
-             b_invmass, b_invinertia, b_estart, nl_start, nl_active, nl_f, t_start, t_pair,
+             b_invmass, b_invinertia, b_aux, b_estart, nl_start, nl_active, nl_f, t_start, t_pair,
              wl_start, wl_active, wl_f)
     for w in range(w_force.shape[0]):
         for d in range(3):
@@ -368,7 +368,7 @@ def compute_forces(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_for
 @jit
 def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements,
               b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass,
-              b_invinertia, b_vf, b_wf, b_estart, e_owner, e_offset, e_radius, e_mat, e_pos,
+              b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner, e_offset, e_radius, e_mat, e_pos,
               e_ref, nl_start, nl_j, nl_hist, nl_active, nl_f, new_start, new_j, new_hist,
               new_active, t_start, t_pair, wl_start, wl_w, wl_hist, wl_active, wl_f,
               wnew_start, wnew_w, wnew_hist, wnew_active, w_point, w_normal, w_vel, w_mat,
@@ -382,10 +382,10 @@ def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements,
     diag[1] = 0
     for s in range(nsteps):
         begin_step(dt, update_elements, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
-                   b_invmass, b_invinertia, b_vf, b_wf, b_estart, e_offset, e_pos, e_ref,
+                   b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_offset, e_pos, e_ref,
                    e_worst)
         finish_step(dt, gravity, skin, max_overlap, update_elements, b_pos, b_vel, b_quat,
-                    b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf,
+                    b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux,
                     b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref, nl_start, nl_j,
                     nl_hist, nl_active, nl_f, new_start, new_j, new_hist, new_active, t_start,
                     t_pair,
@@ -424,7 +424,7 @@ def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_a
 
 @jit
 def finish_step(dt, gravity, skin, max_overlap, update_elements, b_pos, b_vel, b_quat,
-                b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf,
+                b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux,
                 b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref, nl_start, nl_j, nl_hist,
                 nl_active, nl_f, new_start, new_j, new_hist, new_active, t_start, t_pair,
                 wl_start, wl_w, wl_hist, wl_active, wl_f, wnew_start, wnew_w, wnew_hist,
@@ -444,7 +444,7 @@ def finish_step(dt, gravity, skin, max_overlap, update_elements, b_pos, b_vel, b
         if diag[0] != STATUS_OK:
             return
     worst = compute_forces(dt, True, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
-                           b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_estart, e_owner,
+                           b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner,
                            e_radius, e_mat,
                            e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair,
                            wl_start, wl_w, wl_hist, wl_active, wl_f, w_point, w_normal, w_vel,
