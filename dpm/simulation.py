@@ -40,8 +40,10 @@ class Simulation:
 
     Parameters
     ----------
-    dt : float
-        Time step [s], > 0.
+    dt : float or "auto"
+        Time step [s], > 0; ``"auto"`` takes 1/20 of the shortest contact duration and at
+        most 0.2 of the Rayleigh step, chosen when the run starts (see
+        :meth:`time_step_report`).
     gravity : 3-vector
         Gravitational acceleration [m/s2].
     integrator : str
@@ -74,7 +76,7 @@ class Simulation:
     """
 
     parameters = {
-        "dt": Parameter(low=0.0, low_open=True, unit="s", doc="time step"),
+        "dt": Parameter(low=0.0, low_open=True, unit="s", doc="time step or 'auto'"),
         "gravity": Parameter(default=(0.0, 0.0, 0.0), kind="vector", unit="m/s2"),
         "integrator": Parameter(default="velocity_verlet", kind="str"),
         "skin": Parameter(default=None, low=0.0, low_open=True, unit="m"),
@@ -85,12 +87,14 @@ class Simulation:
                              doc="number of threads"),
     }
 
-    def __init__(self, dt: float, gravity: Sequence[float] = (0.0, 0.0, 0.0),
+    def __init__(self, dt: float | str, gravity: Sequence[float] = (0.0, 0.0, 0.0),
                  integrator: str = "velocity_verlet", skin: float | None = None,
                  dt_check: str = "refuse", max_overlap: float = 0.5,
                  overlap_tolerance: float = 0.01, threads: int | None = None) -> None:
+        self._auto_dt = isinstance(dt, str) and dt == "auto"
         v = validate("Simulation()", self.parameters, dict(
-            dt=dt, gravity=gravity, integrator=integrator, skin=skin, dt_check=dt_check,
+            dt=1.0 if self._auto_dt else dt, gravity=gravity, integrator=integrator,
+            skin=skin, dt_check=dt_check,
             max_overlap=max_overlap, overlap_tolerance=overlap_tolerance, threads=threads))
         self.threads = None if threads is None else int(threads)
         if v["dt_check"] not in DT_CHECKS:
@@ -99,7 +103,7 @@ class Simulation:
         self._registry = registry()
         self.integrator = self._registry.lookup("integrator", integrator,
                                                 "Simulation()")()
-        self.dt = float(v["dt"])
+        self.dt = float("nan") if self._auto_dt else float(v["dt"])
         self.gravity = np.asarray(v["gravity"], float)
         self.skin = v["skin"]
         self.dt_check = v["dt_check"]
@@ -124,6 +128,7 @@ class Simulation:
         self.last_output = None
         self._output_path: str | None = None
         self._output_every: int | None = None
+        self._output_every_s: float | None = None
         self._diag = np.zeros(8)
         self._module = None
         self._pair_model = np.zeros((0, 0), np.int64)
@@ -242,13 +247,14 @@ class Simulation:
         if every is not None:
             validate("sim.output()", {"every": Parameter(low=0.0, low_open=True, unit="s")},
                      {"every": every})
-            every_steps = max(1, round(every / self.dt))
-        validate("sim.output()", {"every_steps": Parameter(low=1, kind="float")},
-                 {"every_steps": every_steps})
+        else:
+            validate("sim.output()", {"every_steps": Parameter(low=1, kind="float")},
+                     {"every_steps": every_steps})
         self.close()
         self._writer = None
         self._output_path = str(path)
-        self._output_every = int(every_steps)
+        self._output_every_s = every
+        self._output_every = None if every is not None else int(every_steps)
 
     def close(self) -> None:
         """Close the output file; a later run appends to a new file only after a new
@@ -297,7 +303,8 @@ class Simulation:
                     r = ma.rayleigh_time_step(rmin_a)
                     if r is not None and (rayleigh is None or r < rayleigh):
                         rayleigh = r
-        return TimeStepReport(self.dt, rayleigh, tc, speed, pair)
+        return TimeStepReport(self.dt, rayleigh, tc, speed, pair,
+                              self.integrator.min_steps_per_contact)
 
     def _smallest_pair(self, ia: int, ib: int) -> tuple[float, float]:
         """(m*, R*) of the smallest bodies of materials ia and ib (a wall material alone
@@ -391,6 +398,9 @@ class Simulation:
         """Validate the scene, pack the tables, pick and compile the step kernels."""
         self._validate_scene()
         report = self.time_step_report()
+        if self._auto_dt and not self.dt > 0:
+            self.dt = report.auto()
+            report.dt = self.dt
         refuse, warn = report.problems()
         if self.dt_check == "refuse" and refuse:
             raise ParameterError("Simulation(): time step too large:\n  " + "\n  ".join(refuse)
@@ -508,13 +518,15 @@ class Simulation:
             raise ParameterError("sim.run(): give exactly one of steps or until")
         if steps is not None:
             validate("sim.run()", {"steps": Parameter(low=0)}, {"steps": steps})
-            nsteps = int(steps)
         else:
             validate("sim.run()", {"until": Parameter(low=self.time, unit="s")},
                      {"until": until})
-            nsteps = max(0, math.ceil((until - self.time) / self.dt - 1e-9))
         if not self._prepared:
             self._prepare()
+        if steps is not None:
+            nsteps = int(steps)
+        else:
+            nsteps = max(0, math.ceil((until - self.time) / self.dt - 1e-9))
         threads_before = numba.get_num_threads()
         if self.threads is not None:
             numba.set_num_threads(self.threads)
@@ -541,6 +553,8 @@ class Simulation:
         if self._output_path is not None and self._writer is None:
             from .io.hdf5 import Writer
 
+            if self._output_every_s is not None:
+                self._output_every = max(1, round(self._output_every_s / self.dt))
             self._writer = Writer(self._output_path, self)
             self.last_output = self._writer
             self._write_frame()

@@ -12,6 +12,9 @@ WARN_STEPS_PER_CONTACT = 10.0
 #: fraction of the Rayleigh step above which a warning is given / the run is refused
 WARN_RAYLEIGH_FRACTION = 0.3
 MAX_RAYLEIGH_FRACTION = 1.0
+#: dt="auto": steps per shortest contact and fraction of the Rayleigh step
+AUTO_STEPS_PER_CONTACT = 20.0
+AUTO_RAYLEIGH_FRACTION = 0.2
 
 
 @dataclass
@@ -28,6 +31,18 @@ class TimeStepReport:
     contact_time: float | None
     impact_speed: float
     pair: str = ""
+    #: fewest steps per contact the integrator in use accepts
+    min_steps: float = MIN_STEPS_PER_CONTACT
+
+    def auto(self) -> float:
+        """The step ``Simulation(dt="auto")`` takes: the smaller of 1/20 of the shortest
+        contact and 0.2 of the Rayleigh step (1 ms if the scene has neither)."""
+        cands = []
+        if self.contact_time is not None:
+            cands.append(self.contact_time / AUTO_STEPS_PER_CONTACT)
+        if self.rayleigh is not None:
+            cands.append(AUTO_RAYLEIGH_FRACTION * self.rayleigh)
+        return min(cands) if cands else 1e-3
 
     @property
     def steps_per_contact(self) -> float | None:
@@ -48,9 +63,9 @@ class TimeStepReport:
             msg = (f"dt={self.dt:g} s resolves the shortest contact ({self.pair}, "
                    f"{self.contact_time:.3g} s at {self.impact_speed:.3g} m/s) with "
                    f"{spc:.3g} steps")
-            if spc < MIN_STEPS_PER_CONTACT:
-                refuse.append(msg + f" (allowed: >= {MIN_STEPS_PER_CONTACT:g}; "
-                              f"critical dt = {self.contact_time / MIN_STEPS_PER_CONTACT:.3g} s)")
-            elif spc < WARN_STEPS_PER_CONTACT:
+            if spc < self.min_steps:
+                refuse.append(msg + f" (allowed: >= {self.min_steps:g}; "
+                              f"critical dt = {self.contact_time / self.min_steps:.3g} s)")
+            elif spc < max(WARN_STEPS_PER_CONTACT, self.min_steps):
                 warn.append(msg + f" (advised: >= {WARN_STEPS_PER_CONTACT:g})")
         return refuse, warn

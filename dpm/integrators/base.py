@@ -28,6 +28,9 @@ class Integrator:
     kernel_module: ClassVar[str] = ""
     order: ClassVar[int] = 1
     aux_columns: ClassVar[int] = 0
+    #: fewest steps per shortest contact the time-step check accepts (explicit schemes go
+    #: unstable near 2/omega; an unconditionally stable implicit scheme may lower it)
+    min_steps_per_contact: ClassVar[float] = 5.0
     implicit: ClassVar[bool] = False
 
     def start(self, sim: Any) -> None:
