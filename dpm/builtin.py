@@ -13,7 +13,7 @@ from .impact import (
     MawLinearSpring,
     WaltonBraun,
 )
-from .integrators import SymplecticEuler, VelocityVerlet
+from .integrators import Gear4, Gear5, PositionVerlet, SymplecticEuler, Taylor, VelocityVerlet
 from .shapes import BUILTIN_SHAPES
 
 
@@ -44,3 +44,7 @@ def dpm_register_impact_models(register: Register) -> None:
 def dpm_register_integrators(register: Register) -> None:
     register("symplectic_euler", SymplecticEuler)
     register("velocity_verlet", VelocityVerlet)
+    register("taylor", Taylor)
+    register("position_verlet", PositionVerlet)
+    register("gear4", Gear4)
+    register("gear5", Gear5)
