@@ -13,7 +13,17 @@ from .impact import (
     MawLinearSpring,
     WaltonBraun,
 )
-from .integrators import Gear4, Gear5, PositionVerlet, SymplecticEuler, Taylor, VelocityVerlet
+from .integrators import (
+    BackwardEuler,
+    Gear4,
+    Gear5,
+    NewmarkBeta,
+    Numerov,
+    PositionVerlet,
+    SymplecticEuler,
+    Taylor,
+    VelocityVerlet,
+)
 from .shapes import BUILTIN_SHAPES
 
 
@@ -48,3 +58,6 @@ def dpm_register_integrators(register: Register) -> None:
     register("position_verlet", PositionVerlet)
     register("gear4", Gear4)
     register("gear5", Gear5)
+    register("backward_euler", BackwardEuler)
+    register("newmark_beta", NewmarkBeta)
+    register("numerov", Numerov)

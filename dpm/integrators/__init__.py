@@ -2,6 +2,7 @@
 
 from .base import Integrator, SymplecticEuler, VelocityVerlet
 from .explicit import Gear4, Gear5, PositionVerlet, Taylor
+from .implicit import BackwardEuler, NewmarkBeta, Numerov
 
-__all__ = ["Gear4", "Gear5", "Integrator", "PositionVerlet", "SymplecticEuler", "Taylor",
-           "VelocityVerlet"]
+__all__ = ["BackwardEuler", "Gear4", "Gear5", "Integrator", "NewmarkBeta", "Numerov",
+           "PositionVerlet", "SymplecticEuler", "Taylor", "VelocityVerlet"]

@@ -1,0 +1,293 @@
+"""Implicit integrators: backward Euler, Newmark-beta and Numerov, solved by Newton-Raphson
+with block Gauss-Seidel on the sparse contact Jacobian (DPM thesis, Samiei 2012, ch. 3).
+
+The equations, the Jacobian and the treatment of friction and rotation are in
+:mod:`dpm.kernels.implicit` and docs/integrators.md. These classes pack the scene for the
+kernels, keep the candidate contact list and its tangential history between steps, and
+report the Newton iterations of every step.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ..errors import SceneError
+from ..kernels import implicit as K
+from .base import Integrator
+
+#: contact laws the implicit kernels can call, by the (module, function) of the model
+LAW_KINDS = {
+    ("dpm.kernels.law_linear", "linear_spring_dashpot"): K.LAW_LINEAR,
+    ("dpm.kernels.law_hertz_mindlin", "hertz_mindlin"): K.LAW_HERTZ_MINDLIN,
+    ("dpm.kernels.law_hooke", "hooke"): K.LAW_HOOKE,
+}
+PLANE_KINDS = ("plane", "box")
+
+
+class ImplicitIntegrator(Integrator):
+    """Common machinery of the implicit schemes (see :mod:`dpm.kernels.implicit`).
+
+    Attributes to tune after ``Simulation(...)`` (``sim.integrator.tolerance = ...``):
+
+    - ``tolerance``: Newton stops when every body's correction is below
+      ``tolerance`` x the smallest radius (default 1e-10);
+    - ``max_iterations``: Newton iterations allowed per step (default 50); a step that
+      needs more stops the run with :class:`dpm.UnstableRunError`;
+    - ``gs_tolerance``: Gauss-Seidel stops when a sweep changes no correction by more than
+      this fraction of the Newton tolerance (default 0.01); ``gs_max_sweeps`` (500).
+
+    Reported: ``iterations`` (Newton iterations of each step of the last run call),
+    ``last_iterations``, ``max_iterations_used`` and ``stats`` (steps, iterations,
+    Gauss-Seidel sweeps, candidate rebuilds, largest iteration count).
+    """
+
+    implicit: ClassVar[bool] = True
+    #: only used to compile the force evaluation of the first state (``_prime_forces``)
+    kernel_module = "dpm.kernels.integrate_velocity_verlet"
+    #: unconditionally stable for linear contacts: one step per contact is accepted
+    min_steps_per_contact = 1.0
+    aux_columns = 6
+    scheme: ClassVar[int] = K.BACKWARD_EULER
+    #: weight of the end-of-step torque in the angular velocity update
+    theta: ClassVar[float] = 0.5
+
+    def __init__(self) -> None:
+        self.tolerance = 1e-10
+        self.max_iterations = 50
+        self.gs_tolerance = 0.01
+        self.gs_max_sweeps = 500
+        self.iterations = np.zeros(0, np.int64)
+        self.last_iterations = 0
+        self.max_iterations_used = 0
+        self.stats = dict(steps=0, iterations=0, sweeps=0, rebuilds=0, max_iterations=0)
+        self._ready = False
+
+    # ------------------------------------------------------------------ scene packing
+    def _setup(self, sim: Any) -> None:
+        b, e = sim.bodies, sim.elements
+        problems = []
+        if not (len(e) == len(b) and np.all(e.offset == 0.0)
+                and np.array_equal(e.owner, np.arange(len(b)))):
+            problems.append("only sphere scenes (one element per body at its centre) are "
+                            "supported; clustered bodies need an explicit integrator")
+        if np.any(b.invmass == 0.0):
+            problems.append("bodies of infinite mass are not supported")
+        for k, bd in enumerate(sim.boundaries):
+            if bd.name not in PLANE_KINDS:
+                problems.append(f"boundary {k} ({bd.name}) is not supported; allowed: "
+                                + ", ".join(PLANE_KINDS))
+        if sim.walls is not None and len(sim.walls.velocity) and np.any(sim.walls.velocity):
+            problems.append("moving planes are not supported")
+        laws: list[tuple[str, str]] = []
+        for law in sim._contacts.values():
+            if law.kernel not in laws:
+                laws.append(law.kernel)
+        self._law_kind = np.zeros(max(len(laws), 1), np.int64)
+        for k, kern in enumerate(laws):
+            if kern not in LAW_KINDS:
+                problems.append(f"contact law {kern[1]!r} is not supported; allowed: "
+                                + ", ".join(f for _, f in LAW_KINDS))
+            else:
+                self._law_kind[k] = LAW_KINDS[kern]
+        if np.any(sim._pair_params[..., 6] != 0.0):
+            problems.append("rolling resistance is not supported")
+        if problems:
+            raise SceneError(f"integrator {self.name!r}: " + "; ".join(problems))
+        n = len(b)
+        self._radius = np.ascontiguousarray(e.radius)
+        self._inertia = np.ascontiguousarray(b.inertia[:, 0])
+        self._rmin = float(self._radius.min())
+        self._pi = np.zeros(8 * n + 16, np.int64)
+        self._pj = np.zeros(8 * n + 16, np.int64)
+        self._pkey = np.zeros(0, np.int64)
+        self._phist = np.zeros((0, 8))
+        self._wi = np.zeros(2 * n + 16, np.int64)
+        self._ww = np.zeros(2 * n + 16, np.int64)
+        self._wkey = np.zeros(0, np.int64)
+        self._whist = np.zeros((0, 8))
+        self._np = np.zeros(1, np.int64)
+        self._nw = np.zeros(1, np.int64)
+        self._xref = np.zeros((n, 3))
+        self._work = np.zeros((10, n, 3))
+        self._margin = 0.0
+        self._ready = True
+
+    def _rebuild(self, sim: Any) -> None:
+        """Candidate pairs and plane entries within a margin of the current positions,
+        with the tangential history of those that were candidates before."""
+        b, w = sim.bodies, sim.walls
+        x = b.position
+        dt = sim.dt
+        acc = np.linalg.norm(b.force * b.invmass[:, None], axis=1)
+        step = float(np.max(np.linalg.norm(b.velocity, axis=1) * dt + 0.5 * acc * dt * dt,
+                            initial=0.0))
+        self._margin = max(0.2 * self._rmin, 4.0 * step)
+        n = len(x)
+        while True:
+            cnt = K.candidate_pairs(x, self._radius, self._margin, self._pi, self._pj)
+            if cnt <= len(self._pi):
+                break
+            self._pi = np.zeros(2 * cnt, np.int64)
+            self._pj = np.zeros(2 * cnt, np.int64)
+        key = np.zeros(cnt, np.int64)
+        hist = np.zeros((cnt, 8))
+        K.sort_and_merge(self._pi, self._pj, cnt, n, self._pkey, self._phist, key, hist)
+        self._pkey, self._phist, self._np[0] = key, hist, cnt
+        nw = len(w.point)
+        while True:
+            cw = K.candidate_walls(x, self._radius, self._margin, w.point, w.normal, self._wi,
+                                   self._ww)
+            if cw <= len(self._wi):
+                break
+            self._wi = np.zeros(2 * cw, np.int64)
+            self._ww = np.zeros(2 * cw, np.int64)
+        key = np.zeros(cw, np.int64)
+        hist = np.zeros((cw, 8))
+        K.sort_and_merge(self._wi, self._ww, cw, max(nw, 1), self._wkey, self._whist, key, hist)
+        self._wkey, self._whist, self._nw[0] = key, hist, cw
+        self._xref[:] = x
+        self.stats["rebuilds"] += 1
+
+    def _forces(self, sim: Any, x: np.ndarray, v: np.ndarray, w: np.ndarray) -> tuple:
+        """(force incl. gravity, torque) at (x, v, w) without touching the histories."""
+        b, wl = sim.bodies, sim.walls
+        f = np.zeros_like(x)
+        t = np.zeros_like(x)
+        wf = np.zeros((len(wl.point), 3))
+        K.contact_forces(x, v, w, sim.dt, self._radius, b.mass, b.material, self._law_kind,
+                         sim._pair_model, sim._pair_params, wl.point, wl.normal, wl.material,
+                         self._pi, self._pj, int(self._np[0]), self._phist, self._wi, self._ww,
+                         int(self._nw[0]), self._whist, f, t, wf)
+        f += b.mass[:, None] * sim.gravity
+        return f, t, wf
+
+    # ------------------------------------------------------------------ Integrator API
+    def start(self, sim: Any) -> None:
+        """Pack the scene, build the candidates, the forces of the first state (and the
+        Numerov history)."""
+        self._setup(sim)
+        self._rebuild(sim)
+        b = sim.bodies
+        f, t, wf = self._forces(sim, b.position, b.velocity, b.angular_velocity)
+        b.force[:] = f
+        b.torque[:] = t
+        sim.walls.force[:] = wf
+        sim._aux[:] = 0.0
+        self._start_history(sim)
+
+    def _start_history(self, sim: Any) -> None:
+        """Scheme-specific history (Numerov: x_{-1}, a_{-1})."""
+
+    def advance(self, sim: Any, n: int) -> int:
+        if not self._ready:
+            self.start(sim)
+        b, wl, d = sim.bodies, sim.walls, sim._diag
+        tol = self.tolerance * self._rmin
+        log = np.zeros(n, np.int64)
+        stats = np.zeros(4)
+        done = 0
+        d[4] = 0.0
+        while done < n:
+            d[0] = K.STATUS_OK
+            K.implicit_steps(
+                n - done, self.scheme, sim.dt, sim.gravity, tol, self.max_iterations,
+                self.gs_tolerance * tol, self.gs_max_sweeps, sim.max_overlap, self.theta,
+                b.position, b.velocity, b.orientation, b.angular_velocity, b.force, b.torque,
+                sim._aux, self._radius, b.mass, self._inertia, b.material, self._law_kind,
+                sim._pair_model, sim._pair_params, wl.point, wl.normal, wl.material, wl.force,
+                self._pi, self._pj, self._np, self._pkey, self._phist, self._wi, self._ww,
+                self._nw, self._wkey, self._whist, self._xref, self._margin, self._work,
+                np.zeros(1, np.int64), log[done:], stats, d)
+            done += int(d[1])
+            if d[0] == K.STATUS_OVERFLOW:
+                self._rebuild(sim)
+                continue
+            break
+        self.iterations = log[:done]
+        self.stats["steps"] += done
+        self.stats["iterations"] += int(stats[0])
+        self.stats["sweeps"] += int(stats[1])
+        self.stats["max_iterations"] = max(self.stats["max_iterations"], int(stats[3]))
+        self.max_iterations_used = self.stats["max_iterations"]
+        if done:
+            self.last_iterations = int(log[done - 1])
+        if d[0] == K.STATUS_NOT_CONVERGED:
+            d[0] = K.STATUS_OK
+            sim.step_count += done
+            sim.time = sim.step_count * sim.dt
+            sim._update_boundary_loads()
+            sim._fail(f"{self.name}: Newton-Raphson did not converge within "
+                      f"{self.max_iterations} iterations in the next step (largest correction "
+                      f"{stats[2]:.3g} m, tolerance {tol:.3g} m)")
+        d[1] = done
+        return done
+
+
+class BackwardEuler(ImplicitIntegrator):
+    """Backward (implicit) Euler, first order, L-stable (DPM thesis §3.3.1, eqs. 3.2-3.3).
+
+        v_{n+1} = v_n + dt a_{n+1},   x_{n+1} = x_n + dt v_{n+1}
+
+    Numerically damped: an undamped contact loses energy (restitution below 1).
+    """
+
+    name = "backward_euler"
+    order = 1
+    scheme = K.BACKWARD_EULER
+    theta = 1.0
+
+
+class NewmarkBeta(ImplicitIntegrator):
+    """Newmark-beta, average acceleration (beta = 1/4, gamma = 1/2; Newmark 1959; DPM
+    thesis §3.3.3, eqs. 3.7-3.8): the trapezoidal rule, second order, A-stable, no
+    numerical damping.
+
+        v_{n+1} = v_n + dt (a_n + a_{n+1}) / 2
+        x_{n+1} = x_n + dt v_n + dt^2 (a_n + a_{n+1}) / 4
+    """
+
+    name = "newmark_beta"
+    order = 2
+    scheme = K.NEWMARK
+
+
+class Numerov(ImplicitIntegrator):
+    """Numerov (Cowell, implicit Stormer), fourth order in position (DPM thesis §3.3.8,
+    eq. 3.25), with the fourth-order velocity v_{n+1} = (x_{n+1} - x_n)/dt
+    + dt/24 (7 a_{n+1} + 6 a_n - a_{n-1}).
+
+        x_{n+1} = 2 x_n - x_{n-1} + dt^2/12 (a_{n+1} + 10 a_n + a_{n-1})
+
+    Two-step: x_{-1}, a_{-1} come from a backward RK4 integration over one step (4
+    substeps) at the start, so the start does not spoil the order. Stable for
+    omega dt < sqrt(6) (undamped linear contact): it is not A-stable, one step per contact
+    (omega dt = pi) is already beyond its limit; at least 1.3 steps per contact.
+    """
+
+    name = "numerov"
+    order = 4
+    scheme = K.NUMEROV
+    min_steps_per_contact = 1.3
+
+    def _start_history(self, sim: Any) -> None:
+        b = sim.bodies
+        w = b.angular_velocity
+        m = b.mass[:, None]
+
+        def acc(x, v):
+            return self._forces(sim, x, v, w)[0] / m
+
+        x, v = b.position.copy(), b.velocity.copy()
+        h = -sim.dt / 4
+        for _ in range(4):
+            k1x, k1v = v, acc(x, v)
+            k2x, k2v = v + 0.5 * h * k1v, acc(x + 0.5 * h * k1x, v + 0.5 * h * k1v)
+            k3x, k3v = v + 0.5 * h * k2v, acc(x + 0.5 * h * k2x, v + 0.5 * h * k2v)
+            k4x, k4v = v + h * k3v, acc(x + h * k3x, v + h * k3v)
+            x = x + h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x)
+            v = v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        sim._aux[:, 0:3] = x
+        sim._aux[:, 3:6] = acc(x, v)
+
