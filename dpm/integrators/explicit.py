@@ -49,7 +49,8 @@ class Gear4(Integrator):
 
     name = "gear4"
     kernel_module = "dpm.kernels.integrate_gear4"
-    order = 3
+    #: measured in position on smooth forces (a linear and a cubic oscillator): 4
+    order = 4
     aux_columns = 6
 
     def start(self, sim: Any) -> None:
@@ -66,7 +67,8 @@ class Gear5(Gear4):
 
     name = "gear5"
     kernel_module = "dpm.kernels.integrate_gear5"
-    order = 4
+    #: measured in position on smooth forces: 5
+    order = 5
     aux_columns = 9
 
 

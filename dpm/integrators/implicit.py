@@ -33,6 +33,10 @@ class ImplicitIntegrator(Integrator):
 
     - ``tolerance``: Newton stops when every body's correction is below
       ``tolerance`` x the smallest radius (default 1e-10);
+    - ``stall_tolerance``: where no fraction of the Newton step lowers the residual (a
+      force jump: the linear dashpot switches on with c delta' at delta = 0), the iterate
+      is accepted if its correction is below this x the smallest radius (default 1e-4);
+      such steps are counted in ``stats["stalled"]``;
     - ``max_iterations``: Newton iterations allowed per step (default 50); a step that
       needs more stops the run with :class:`dpm.UnstableRunError`;
     - ``gs_tolerance``: Gauss-Seidel stops when a sweep changes no correction by more than
@@ -55,13 +59,15 @@ class ImplicitIntegrator(Integrator):
 
     def __init__(self) -> None:
         self.tolerance = 1e-10
+        self.stall_tolerance = 1e-4
         self.max_iterations = 50
         self.gs_tolerance = 0.01
         self.gs_max_sweeps = 500
         self.iterations = np.zeros(0, np.int64)
         self.last_iterations = 0
         self.max_iterations_used = 0
-        self.stats = dict(steps=0, iterations=0, sweeps=0, rebuilds=0, max_iterations=0)
+        self.stats = dict(steps=0, iterations=0, sweeps=0, rebuilds=0, max_iterations=0,
+                          stalled=0)
         self._ready = False
 
     # ------------------------------------------------------------------ scene packing
@@ -186,13 +192,14 @@ class ImplicitIntegrator(Integrator):
         b, wl, d = sim.bodies, sim.walls, sim._diag
         tol = self.tolerance * self._rmin
         log = np.zeros(n, np.int64)
-        stats = np.zeros(4)
+        stats = np.zeros(5)
         done = 0
         d[4] = 0.0
         while done < n:
             d[0] = K.STATUS_OK
             K.implicit_steps(
-                n - done, self.scheme, sim.dt, sim.gravity, tol, self.max_iterations,
+                n - done, self.scheme, sim.dt, sim.gravity, tol,
+                self.stall_tolerance * self._rmin, self.max_iterations,
                 self.gs_tolerance * tol, self.gs_max_sweeps, sim.max_overlap, self.theta,
                 b.position, b.velocity, b.orientation, b.angular_velocity, b.force, b.torque,
                 sim._aux, self._radius, b.mass, self._inertia, b.material, self._law_kind,
@@ -209,6 +216,7 @@ class ImplicitIntegrator(Integrator):
         self.stats["steps"] += done
         self.stats["iterations"] += int(stats[0])
         self.stats["sweeps"] += int(stats[1])
+        self.stats["stalled"] += int(stats[4])
         self.stats["max_iterations"] = max(self.stats["max_iterations"], int(stats[3]))
         self.max_iterations_used = self.stats["max_iterations"]
         if done:

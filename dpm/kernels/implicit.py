@@ -35,9 +35,15 @@ The linear system is solved by block Gauss-Seidel sweeps (3x3 diagonal blocks in
 the Jacobian and residual are rebuilt every Newton iteration, and contacts are re-detected
 at every iteration from a candidate list (pairs within a margin, built with a cell list
 and kept while no body moved more than half the margin), so a contact that starts during
-a step acts during that step (DPM thesis §3.8.1). Convergence: max |dx| below ``tol``
-(absolute, metres) for every body; a step that does not converge within ``max_iter``
-iterations stops the run with status 5.
+a step acts during that step (DPM thesis §3.8.1). Convergence: a full Newton correction with
+max |dx| below ``tol`` (absolute, metres) for every body. A correction that raises the
+residual sum_i |R_i / m_i|^2 (a contact or a dashpot cut-off switching inside the step
+makes Newton cycle) is halved, up to 6 times (backtracking line search; each halving
+counts as an iteration). Where even 1/64 of the step raises the residual, the residual
+jumps there (the linear dashpot switches on with a jump c delta' at delta = 0, and a root
+may not exist); the iterate is then accepted if the last correction is below
+``stall_tol`` (counted in ``stats[4]``). A step that does not converge within
+``max_iter`` iterations stops the run with status 5.
 
 Tangential forces (spring with history, Coulomb limit) come from the contact law at the
 current iterate with the history of the step start; they enter the residual but not the
@@ -221,11 +227,17 @@ def sort_and_merge(ci, cj, count, nkey, old_key, old_hist, new_key, new_hist):
 @jit
 def evaluate(x, v, w, dt, beta_dt2, gamma_dt, radius, mass, mat, law_kind, pair_model,
              pair_params, w_point, w_normal, w_mat, pi, pj, npair, p_hist0, p_hist, wi, ww, nwall,
-             w_hist0, w_hist, force, torque, w_force, blk, blk_i, blk_j, diag, scratch):
+             w_hist0, w_hist, force, torque, w_force, blk, blk_i, blk_j, diag, scratch, p_seen,
+             w_seen):
     """Contact forces and torques at positions x, velocities v, angular velocities w
     (gravity not included); the Jacobian's blocks (6 entries of the symmetric 3x3 B per
     touching pair, listed in blk/blk_i/blk_j) and its diagonal blocks (``diag``, without
     the mass). Histories start from ``*_hist0`` and the updated ones go to ``*_hist``.
+    ``p_seen[k]``/``w_seen[k]`` (kept over the Newton iterations of a step): the stiffness
+    and damping coefficient (beta dt^2 k + gamma dt c) of a contact once it touched in this
+    step; a candidate that touched before but not now keeps that block in the Jacobian (with
+    zero force), so Newton does not cycle between the branches of a contact that sits at the
+    edge of touching (it becomes a chord iteration with a stiffer Jacobian, which converges).
     Returns (touching pairs, largest overlap / radius)."""
     n = x.shape[0]
     for i in range(n):
@@ -253,6 +265,24 @@ def evaluate(x, v, w, dt, beta_dt2, gamma_dt, radius, mass, mat, law_kind, pair_
         if d2 >= rs * rs:
             for c in range(nh):
                 p_hist[k, c] = 0.0
+            if p_seen[k] > 0.0:
+                dist = math.sqrt(d2)
+                nx = dx / dist
+                ny = dy / dist
+                nz = dz / dist
+                e = p_seen[k]
+                blk[nb, 0] = e * nx * nx
+                blk[nb, 1] = e * ny * ny
+                blk[nb, 2] = e * nz * nz
+                blk[nb, 3] = e * nx * ny
+                blk[nb, 4] = e * nx * nz
+                blk[nb, 5] = e * ny * nz
+                for c in range(6):
+                    diag[i, c] += blk[nb, c]
+                    diag[j, c] += blk[nb, c]
+                blk_i[nb] = i
+                blk_j[nb] = j
+                nb += 1
             continue
         for c in range(nh):
             p_hist[k, c] = p_hist0[k, c]
@@ -300,6 +330,7 @@ def evaluate(x, v, w, dt, beta_dt2, gamma_dt, radius, mass, mat, law_kind, pair_
         kx, cv = normal_derivatives(kind, p, delta, -vn, nx, ny, nz, meff, reff, dt, fn,
                                     scratch)
         s = beta_dt2 * kx + gamma_dt * cv
+        p_seen[k] = max(p_seen[k], s)
         g = beta_dt2 * fn / dist
         # B = s n n^T - g (I - n n^T) = (s + g) n n^T - g I
         e = s + g
@@ -328,6 +359,14 @@ def evaluate(x, v, w, dt, beta_dt2, gamma_dt, radius, mass, mat, law_kind, pair_
         if delta <= 0.0 or dist <= -ri:
             for c in range(nh):
                 w_hist[k, c] = 0.0
+            e = w_seen[k]
+            if e > 0.0 and dist > -ri:
+                diag[i, 0] += e * nx * nx
+                diag[i, 1] += e * ny * ny
+                diag[i, 2] += e * nz * nz
+                diag[i, 3] += e * nx * ny
+                diag[i, 4] += e * nx * nz
+                diag[i, 5] += e * ny * nz
             continue
         for c in range(nh):
             w_hist[k, c] = w_hist0[k, c]
@@ -361,6 +400,7 @@ def evaluate(x, v, w, dt, beta_dt2, gamma_dt, radius, mass, mat, law_kind, pair_
         kx, cv = normal_derivatives(kind, p, delta, -vn, nx, ny, nz, mass[i], ri, dt, fn,
                                     scratch)
         s = beta_dt2 * kx + gamma_dt * cv
+        w_seen[k] = max(w_seen[k], s)
         diag[i, 0] += s * nx * nx
         diag[i, 1] += s * ny * ny
         diag[i, 2] += s * nz * nz
@@ -444,8 +484,9 @@ def gauss_seidel(res, mass, diag, blk, blk_i, blk_j, nb, dx, ptr, adj, dinv, tol
 
 
 @jit
-def implicit_steps(nsteps, scheme, dt, gravity, tol, max_iter, gs_tol, gs_max, max_overlap,
-                   theta, x, v, q, w, force, torque, aux, radius, mass, inertia, mat, law_kind,
+def implicit_steps(nsteps, scheme, dt, gravity, tol, stall_tol, max_iter, gs_tol, gs_max,
+                   max_overlap, theta, x, v, q, w, force, torque, aux, radius, mass, inertia,
+                   mat, law_kind,
                    pair_model, pair_params, w_point, w_normal, w_mat, w_force,
                    pi, pj, npair_arr, p_key, p_hist, wi, ww, nwall_arr, w_key, w_hist,
                    x_ref, margin, work, iwork, it_log, stats, diag):
@@ -457,7 +498,8 @@ def implicit_steps(nsteps, scheme, dt, gravity, tol, max_iter, gs_tol, gs_max, m
     ``x_ref`` with ``margin``; when a converged step moved a body more than margin/2 from
     ``x_ref``, the step returns with status 6 and ``diag[3] = -1`` (rebuild and redo).
     ``it_log[s]``: Newton iterations of step s. ``stats``: [0] iterations, [1] sweeps,
-    [2] largest correction of the last iteration (m), [3] largest iteration count.
+    [2] largest correction of the last iteration (m), [3] largest iteration count,
+    [4] steps accepted at a residual jump (within ``stall_tol``, see below).
     """
     n = x.shape[0]
     beta = 1.0
@@ -495,6 +537,8 @@ def implicit_steps(nsteps, scheme, dt, gravity, tol, max_iter, gs_tol, gs_max, m
     w_hist_new = np.empty_like(w_hist)
     scratch = np.zeros((1, p_hist.shape[1]))
     wfo = np.zeros((w_force.shape[0], 3))
+    p_seen = np.zeros(max(npair, 1))
+    w_seen = np.zeros(max(nwall, 1))
     diag[0] = STATUS_OK
     diag[1] = 0
     half = 0.5 * margin
@@ -519,10 +563,14 @@ def implicit_steps(nsteps, scheme, dt, gravity, tol, max_iter, gs_tol, gs_max, m
                 # first iterate: a_{n+1} = a_n
                 xn[i, d] = xs[i, d] + bdt2 * a
                 x_old[i, d] = x[i, d]
+        p_seen[:] = 0.0
+        w_seen[:] = 0.0
         converged = False
         it = 0
         last = 0.0
         worst = 0.0
+        lam = 1.0
+        rprev = np.inf
         while True:
             for i in range(n):
                 for d in range(3):
@@ -530,19 +578,41 @@ def implicit_steps(nsteps, scheme, dt, gravity, tol, max_iter, gs_tol, gs_max, m
             nb, worst = evaluate(xn, vn, ws, dt, bdt2, gdt, radius, mass, mat, law_kind,
                                  pair_model, pair_params, w_point, w_normal, w_mat, pi, pj,
                                  npair, p_hist, p_hist_new, wi, ww, nwall, w_hist, w_hist_new,
-                                 fc, tc, wfo, blk, blk_i, blk_j, diagb, scratch)
-            if it > 0 and last <= tol:
+                                 fc, tc, wfo, blk, blk_i, blk_j, diagb, scratch, p_seen,
+                                 w_seen)
+            rnorm = 0.0
+            for i in range(n):
+                m = mass[i]
+                for d in range(3):
+                    r = m * (xn[i, d] - xs[i, d]) - bdt2 * (fc[i, d] + m * gravity[d])
+                    res[i, d] = r
+                    rnorm += (r / m) ** 2
+            if it > 0 and lam == 1.0 and last <= tol:
                 converged = True
                 break
             if it >= max_iter:
                 break
+            if it > 0 and rnorm > rprev and lam <= 1.0 / 64.0 and last <= stall_tol:
+                # no descent even along 1/64 of the Newton step: the residual jumps here
+                # (the linear dashpot's force c delta' switches on at delta = 0 with a
+                # jump, so there may be no root); accept a point within stall_tol
+                stats[4] += 1
+                converged = True
+                break
+            if it > 0 and rnorm > rprev and lam > 1.0 / 64.0:
+                # backtracking line search: the full Newton step raised the residual (a
+                # contact or a dashpot switching on or off inside the step): halve it
+                lam *= 0.5
+                for i in range(n):
+                    for d in range(3):
+                        xn[i, d] -= lam * dxv[i, d]
+                it += 1
+                continue
             it += 1
-            for i in range(n):
-                m = mass[i]
-                for d in range(3):
-                    res[i, d] = m * (xn[i, d] - xs[i, d]) - bdt2 * (fc[i, d] + m * gravity[d])
             stats[1] += gauss_seidel(res, mass, diagb, blk, blk_i, blk_j, nb, dxv, ptr, adj,
                                      dinv, gs_tol, gs_max)
+            lam = 1.0
+            rprev = rnorm
             last = 0.0
             for i in range(n):
                 for d in range(3):
@@ -629,4 +699,5 @@ def contact_forces(x, v, w, dt, radius, mass, mat, law_kind, pair_model, pair_pa
     scratch = np.zeros((1, p_hist.shape[1]))
     evaluate(x, v, w, dt, 0.0, 0.0, radius, mass, mat, law_kind, pair_model, pair_params,
              w_point, w_normal, w_mat, pi, pj, npair, p_hist, ph, wi, ww, nwall, w_hist, wh,
-             force, torque, w_force, blk, blk_i, blk_j, diagb, scratch)
+             force, torque, w_force, blk, blk_i, blk_j, diagb, scratch, np.zeros(max(npair, 1)),
+             np.zeros(max(nwall, 1)))
