@@ -23,13 +23,23 @@ from .impact import ImpactModel
 from .integrators import Integrator
 from .io import load
 from .material import Material
+from .motion import (
+    Compose,
+    Motion,
+    Oscillation,
+    Rotation,
+    Translation,
+    TriangularOscillation,
+    Tumbling,
+)
 from .plugins import register, registry
 from .scene_tools import lattice
 from .shapes import Shape
 from .simulation import Simulation
 
 __all__ = [
-    "Boundary", "DpmError", "ImpactModel", "Integrator", "Material", "ParameterError",
-    "SceneError", "Shape", "Simulation", "UnknownNameError", "UnstableRunError", "hookimpl",
-    "lattice", "load", "register", "registry", "__version__",
+    "Boundary", "Compose", "DpmError", "ImpactModel", "Integrator", "Material", "Motion",
+    "Oscillation", "ParameterError", "Rotation", "SceneError", "Shape", "Simulation",
+    "Translation", "TriangularOscillation", "Tumbling", "UnknownNameError",
+    "UnstableRunError", "hookimpl", "lattice", "load", "register", "registry", "__version__",
 ]

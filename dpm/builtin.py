@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .boundaries import Box, Plane
+from .boundaries import Bend, Box, Mesh, Plane, Sieve, Tube, Wall
 from .hookspecs import Register, hookimpl
 from .impact import (
     HertzBrilliantov,
@@ -37,6 +37,11 @@ def dpm_register_shapes(register: Register) -> None:
 def dpm_register_boundaries(register: Register) -> None:
     register("plane", Plane)
     register("box", Box)
+    register("wall", Wall)
+    register("tube", Tube)
+    register("bend", Bend)
+    register("mesh", Mesh)
+    register("sieve", Sieve)
 
 
 @hookimpl

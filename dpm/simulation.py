@@ -24,15 +24,18 @@ from .kernels.step import (
     STATUS_WALL_OVERFLOW,
 )
 from .material import Material
+from .motion import frames
 from .parameters import Parameter, validate
 from .plugins import registry
 from .shapes.base import Shape
-from .state import Bodies, Contacts, Elements, WallContacts, Walls
+from .state import Bodies, BoundaryTable, Contacts, Elements, WallContacts
 from .timestep import TimeStepReport
 
 DT_CHECKS = ("refuse", "warn", "off")
 #: scenes with fewer elements run on one thread unless ``threads`` is given
 SMALL_SCENE = 4000
+#: most steps per kernel call while boundaries move (frames are tabulated per call)
+MOVING_CHUNK = 2000
 
 
 class Simulation:
@@ -116,7 +119,7 @@ class Simulation:
         self.elements = Elements()
         self.contacts = Contacts()
         self.wall_contacts = WallContacts()
-        self.walls: Walls | None = None
+        self.walls: BoundaryTable | None = None
         self.time = 0.0
         self.step_count = 0
         self.rebuild_count = 0
@@ -381,8 +384,8 @@ class Simulation:
         if wc.count:
             i = np.repeat(np.arange(len(e)), np.diff(wc.start))
             p = wc.key[:wc.count]
-            dist = np.einsum("ij,ij->i", e.position[i] - w.point[p], w.normal[p])
-            ratio = (e.radius[i] - dist) / e.radius[i]
+            ratio = self._module.entry_overlaps(e.position, e.radius, wc.start, wc.key,
+                                                w.kind, w.par, w.owner, w.frame)
             k = int(np.argmax(ratio))
             if ratio[k] > tol:
                 bd = self.boundaries[w.owner[p[k]]]
@@ -420,20 +423,16 @@ class Simulation:
             ctx = PairContext(report.impact_speed, *self._smallest_pair(ia, ib))
             self._pair_params[ia, ib] = law.pair_row(self.materials[ia], self.materials[ib],
                                                      ctx)
-        self._module = _plan.step_module(laws, self.integrator.kernel_module)
-        # walls
-        pts, nrm, mats, owners = [], [], [], []
-        for k, bd in enumerate(self.boundaries):
-            p, n = bd.planes()
-            pts.append(p)
-            nrm.append(n)
-            mats += [self._material_index(bd.material, "")] * len(p)
-            owners += [k] * len(p)
         n_el = len(self.elements)
-        self.walls = Walls(np.concatenate(pts) if pts else np.zeros((0, 3)),
-                           np.concatenate(nrm) if nrm else np.zeros((0, 3)), mats, owners)
         if self.skin is None:
             self.skin = 0.4 * float(self.elements.radius.min())
+        # boundaries: primitives, frames, search grids
+        self.walls = BoundaryTable(self.boundaries, lambda m: self._material_index(m, ""),
+                                   float(self.elements.radius.max()) + self.skin)
+        self._moving = any(bd.motion is not None for bd in self.boundaries)
+        self._module = _plan.step_module(laws, self.integrator.kernel_module,
+                                         sorted(set(self.walls.kind.tolist())))
+        self._set_frames()
         e, b = self.elements, self.bodies
         # every body one sphere at its centre: the element positions are the body positions
         self._spheres_only = bool(len(e) == len(b) and np.all(e.offset == 0.0)
@@ -456,7 +455,7 @@ class Simulation:
         self._prepared = True
 
     def _rebuild(self) -> None:
-        e, c, wc, w = self.elements, self.contacts, self.wall_contacts, self.walls
+        e, c, wc, _w = self.elements, self.contacts, self.wall_contacts, self.walls
         d = self._diag
         while True:
             d[0] = STATUS_OK
@@ -464,7 +463,7 @@ class Simulation:
                                  c.start, c.key, c.history, c.active, c.new_start, c.new_key,
                                  c.new_history, c.new_active, c.t_start, c.t_pair, wc.start,
                                  wc.key, wc.history, wc.active, wc.new_start, wc.new_key,
-                                 wc.new_history, wc.new_active, w.point, w.normal, d)
+                                 wc.new_history, wc.new_active, self._bnd(), d)
             if d[0] == STATUS_OVERFLOW:
                 c.grow(int(d[3]))
             elif d[0] == STATUS_WALL_OVERFLOW:
@@ -476,7 +475,7 @@ class Simulation:
 
     def _args(self) -> tuple:
         """Arguments of ``run_steps``/``finish_step`` after ``dt`` (see kernels/step.py)."""
-        b, e, c, wc, w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
+        b, e, c, wc, _w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
         return (self.gravity, self.skin, self.max_overlap, not self._spheres_only,
                 b.position, b.velocity, b.orientation, b.angular_velocity, b.force, b.torque,
                 b.mass, b.invmass, b.invinertia, self._vf, self._wf, self._aux, b.element_start,
@@ -484,14 +483,37 @@ class Simulation:
                 e.offset, e.radius,
                 e.material, e.position, e.reference, c.start, c.key, c.history, c.active,
                 c.force, c.new_start, c.new_key, c.new_history, c.new_active, c.t_start,
-                c.t_pair, wc.start, wc.key, wc.history, wc.active, wc.force, wc.new_start,
-                wc.new_key, wc.new_history, wc.new_active, w.point, w.normal, w.velocity,
-                w.material, w.force, self._pair_model, self._pair_params, self._e_worst,
-                self._e_count, self._diag)
+                c.t_pair, wc.start, wc.key, wc.history, wc.active, wc.force, wc.tag,
+                wc.new_start, wc.new_key, wc.new_history, wc.new_active, self._bnd(),
+                self._pair_model, self._pair_params, self._e_worst, self._e_count, self._diag)
+
+    def _bnd(self) -> tuple:
+        """The boundary arrays the kernels take as one tuple (see kernels/step.py)."""
+        w = self.walls
+        return (w.kind, w.par, w.owner, w.material, w.ids, w.frame, w.frame_ref, w.extent,
+                w.load, w.grid_int, w.grid_flt, w.cell_start, w.cell_items, w.prim_cells)
+
+    def _set_frames(self) -> None:
+        """Boundary frames at the current time."""
+        for k, bd in enumerate(self.boundaries):
+            self.walls.frame[k] = frames(bd.motion, np.array([self.time]))[0]
+            bd._time = self.time
+
+    def _frame_table(self, n: int, step: int) -> np.ndarray:
+        """Frames of moving boundaries at the ends of the n steps after ``step`` (empty if
+        none moves)."""
+        nb = len(self.boundaries)
+        if not self._moving:
+            return np.zeros((0, nb, 18))
+        t = (step + 1 + np.arange(n)) * self.dt
+        table = np.empty((n, nb, 18))
+        for k, bd in enumerate(self.boundaries):
+            table[:, k] = frames(bd.motion, t)
+        return table
 
     def _prime_forces(self) -> None:
         """Forces of the current state without advancing contact history (dt = 0)."""
-        b, e, c, wc, w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
+        b, e, c, wc, _w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
         self._vf[:] = b.velocity
         self._wf[:] = b.angular_velocity
         self._module.compute_forces(
@@ -500,9 +522,8 @@ class Simulation:
             b.element_start, e.owner,
             e.radius, e.material, e.position,
             c.start, c.key, c.history, c.active, c.force, c.t_start, c.t_pair, wc.start,
-            wc.key, wc.history, wc.active, wc.force, w.point, w.normal, w.velocity,
-            w.material, w.force, self._pair_model, self._pair_params, self._e_worst,
-            self._e_count, self._diag)
+            wc.key, wc.history, wc.active, wc.force, wc.tag, self._bnd(), self._pair_model,
+            self._pair_params, self._e_worst, self._e_count, self._diag)
         self._forces_valid = True
 
     # ----------------------------------------------------------------- running
@@ -595,7 +616,11 @@ class Simulation:
                 d[0] = STATUS_OK
                 d[1] = self.integrator.advance(self, n - total)
             else:
-                self._module.run_steps(n - total, self.dt, *self._args())
+                m = n - total
+                if self._moving:
+                    m = min(m, MOVING_CHUNK)
+                table = self._frame_table(m, self.step_count + total)
+                self._module.run_steps(m, self.dt, *self._args(), table)
             ran = int(d[1])
             if d[0] in (STATUS_OVERFLOW, STATUS_WALL_OVERFLOW):
                 # stopped after begin_step: grow, then finish that step
@@ -655,14 +680,19 @@ class Simulation:
 
     def _update_boundary_loads(self) -> None:
         w = self.walls
-        for bd in self.boundaries:
-            bd.force = np.zeros(3)
-            bd.torque = np.zeros(3)
-        if w is None:
-            return
-        for k in range(len(w.point)):
-            bd = self.boundaries[w.owner[k]]
-            bd.force = bd.force + w.force[k]
+        for k, bd in enumerate(self.boundaries):
+            if w is None:
+                bd.force = np.zeros(3)
+                bd.torque = np.zeros(3)
+                continue
+            f = w.load[k, :3].copy()
+            # torque about the frame origin o -> about the torque point c
+            o = w.frame[k, :3]
+            bd.force = f
+            bd.torque = w.load[k, 3:6] + np.cross(o - bd.torque_point, f)
+            bd.velocity = w.frame[k, 12:15].copy()
+            bd.angular_velocity = w.frame[k, 15:18].copy()
+            bd._time = self.time
 
     def _write_frame(self) -> None:
         self._writer.write(self)

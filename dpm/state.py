@@ -131,21 +131,103 @@ class Contacts(_CsrList):
 
 
 class WallContacts(_CsrList):
-    """Element-plane entries (``key`` = plane index) within r + skin, per element, with
-    history, active flag and force row (force, torque)."""
+    """Element-primitive entries (``key`` = boundary primitive index) within r + skin, per
+    element, with history, active flag and force row (force and torque on the body, torque
+    on the boundary about its frame origin); ``tag`` is the contact pass's scratch (the
+    feature of a triangle contact)."""
 
-    FORCE_WIDTH = 6
+    FORCE_WIDTH = 9
+
+    def _allocate(self, cap: int) -> None:
+        super()._allocate(cap)
+        self.tag = np.zeros(cap, np.int64)
 
 
-class Walls:
-    """Packed planes of every plane-type boundary: point, inward normal, velocity, material,
-    owning boundary, and the force the particles exert on each plane (last step)."""
+#: columns of a boundary frame row: origin o [0:3], rotation R [3:12] (row-major, local to
+#: world), origin velocity [12:15], angular velocity [15:18]; x_world = R x_local + o
+FRAME_WIDTH = 18
+IDENTITY_FRAME = np.array([0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0], float)
 
-    def __init__(self, points, normals, materials, owners) -> None:
-        k = len(points)
-        self.point = np.ascontiguousarray(np.asarray(points, float).reshape(k, 3))
-        self.normal = np.ascontiguousarray(np.asarray(normals, float).reshape(k, 3))
-        self.velocity = np.zeros((k, 3))
-        self.material = np.asarray(materials, np.int64).reshape(k)
-        self.owner = np.asarray(owners, np.int64).reshape(k)  # boundary index of each plane
-        self.force = np.zeros((k, 3))
+
+class BoundaryTable:
+    """Packed primitives of every boundary, their boundary frames and search grids.
+
+    Per primitive: ``kind``, ``par`` (geometry in the boundary frame, see
+    :mod:`dpm.kernels.boundary_geometry`), ``owner`` (boundary index), ``material``,
+    ``ids`` (triangle vertex ids and feature flags). Per boundary: ``frame`` (current),
+    ``frame_ref`` (at the last rebuild), ``extent`` (largest distance of its geometry from
+    the frame origin; inf if unbounded), ``load`` (force [0:3] and torque about the frame
+    origin [3:6] that the particles exert, last step), and its search grid (``grid_int``:
+    use grid, dims x3, base cell, first and last primitive; ``grid_flt``: lower corner x3,
+    cell size; ``cell_start``/``cell_items``: primitives per cell; ``prim_cells``: each
+    primitive's cell range).
+    """
+
+    def __init__(self, boundaries, material_index, reach: float) -> None:
+        kinds, pars, owners, mats, ids = [], [], [], [], []
+        nb = len(boundaries)
+        self.grid_int = np.zeros((nb, 8), np.int64)
+        self.grid_flt = np.zeros((nb, 4))
+        self.extent = np.zeros(nb)
+        starts, items = [0], []
+        cells_of = []
+        first = 0
+        for k, bd in enumerate(boundaries):
+            prims = bd.primitives()
+            n = len(prims.kind)
+            kinds.append(prims.kind)
+            pars.append(prims.par)
+            owners.append(np.full(n, k, np.int64))
+            mats.append(np.full(n, material_index(bd.material), np.int64))
+            ids.append(prims.ids)
+            self.extent[k] = prims.extent
+            g = self.grid_int[k]
+            g[5] = first
+            g[6] = first + n
+            lo, hi = prims.lower, prims.upper
+            if n > 16 and np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)):
+                lo = lo.min(axis=0) - reach
+                hi = hi.max(axis=0) + reach
+                size = max(2.0 * reach, float(np.max(hi - lo)) / 1e3)
+                dims = np.maximum(np.ceil((hi - lo) / size).astype(np.int64), 1)
+                while np.prod(dims) > 8 * n + 64:
+                    size *= 1.5
+                    dims = np.maximum(np.ceil((hi - lo) / size).astype(np.int64), 1)
+                c_lo = np.clip(((prims.lower - lo) / size).astype(np.int64), 0, dims - 1)
+                c_hi = np.clip(((prims.upper - lo) / size).astype(np.int64), 0, dims - 1)
+                g[0] = 1
+                g[1:4] = dims
+                g[4] = len(starts) - 1
+                self.grid_flt[k, :3] = lo
+                self.grid_flt[k, 3] = size
+                ncell = int(np.prod(dims))
+                buckets = [[] for _ in range(ncell)]
+                for p in range(n):
+                    for cx in range(c_lo[p, 0], c_hi[p, 0] + 1):
+                        for cy in range(c_lo[p, 1], c_hi[p, 1] + 1):
+                            for cz in range(c_lo[p, 2], c_hi[p, 2] + 1):
+                                buckets[(cx * dims[1] + cy) * dims[2] + cz].append(first + p)
+                for bucket in buckets:
+                    items.extend(bucket)
+                    starts.append(len(items))
+                cells_of.append(np.hstack([c_lo, c_hi]))
+            else:
+                cells_of.append(np.zeros((n, 6), np.int64))
+            first += n
+        def cat(a, shape, dt):
+            return (np.ascontiguousarray(np.concatenate(a)).astype(dt)
+                       if a else np.zeros(shape, dt))
+        self.kind = cat(kinds, (0,), np.int64)
+        self.par = cat(pars, (0, 20), float).reshape(-1, 20)
+        self.owner = cat(owners, (0,), np.int64)
+        self.material = cat(mats, (0,), np.int64)
+        self.ids = cat(ids, (0, 4), np.int64).reshape(-1, 4)
+        self.prim_cells = cat(cells_of, (0, 6), np.int64).reshape(-1, 6)
+        self.cell_start = np.asarray(starts, np.int64)
+        self.cell_items = np.asarray(items or [0], np.int64)
+        self.frame = np.tile(IDENTITY_FRAME, (nb, 1))
+        self.frame_ref = self.frame[:, :12].copy()
+        self.load = np.zeros((nb, 6))
+
+    def __len__(self) -> int:
+        return len(self.kind)

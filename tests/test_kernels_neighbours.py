@@ -91,19 +91,3 @@ def test_transpose_lists_second_elements():
         ks = t_pair[t_start[e]:t_start[e + 1]]
         assert np.all(j[ks] == e) and np.all(np.diff(ks) > 0)
     assert t_start[-1] == count
-
-
-def test_wall_list_finds_planes_within_skin():
-    pos = np.array([[0.5e-3, 5e-3, 5e-3], [5e-3, 5e-3, 5e-3], [1.2e-3, 9.5e-3, 5e-3]])
-    rad = np.full(3, 1e-3)
-    pts = np.array([[0, 0, 0], [0, 0.01, 0]], float)
-    nrm = np.array([[1, 0, 0], [0, -1, 0]], float)
-    n, cap = 3, 16
-    start = np.zeros(n + 1, np.int64)
-    key = np.zeros(cap, np.int64)
-    args = (start, key, np.zeros((cap, N_HISTORY)), np.zeros(cap, np.uint8),
-            np.zeros(n + 1, np.int64), np.zeros(cap, np.int64), np.zeros((cap, N_HISTORY)),
-            np.zeros(cap, np.uint8))
-    count = neighbours.build_wall_list(pos, rad, 0.5e-3, pts, nrm, *args)
-    assert count == 3
-    assert list(start) == [0, 1, 1, 3] and list(key[:3]) == [0, 0, 1]

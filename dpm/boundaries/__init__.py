@@ -1,7 +1,12 @@
-"""Boundaries: walls that exert forces on particles."""
+"""Boundaries: walls, tubes, bends, meshes and sieves that exert forces on particles."""
 
-from .base import Boundary
+from .base import Boundary, Primitives
+from .bend import Bend
 from .box import Box
+from .mesh import Mesh
 from .plane import Plane
+from .sieve import Sieve
+from .tube import Tube
+from .wall import Wall
 
-__all__ = ["Boundary", "Box", "Plane"]
+__all__ = ["Bend", "Boundary", "Box", "Mesh", "Plane", "Primitives", "Sieve", "Tube", "Wall"]

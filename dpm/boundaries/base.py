@@ -2,43 +2,125 @@
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
+from ..kernels.boundary_geometry import PAR_WIDTH, PLANE
 from ..material import Material
 from ..parameters import Parameter, validate
+
+
+@dataclass
+class Primitives:
+    """A boundary's contact geometry for the kernels, in its own frame (the world frame at
+    t = 0): ``kind`` (n,), ``par`` (n, PAR_WIDTH) as in :mod:`dpm.kernels.boundary_geometry`,
+    ``ids`` (n, 4) triangle vertex ids and feature flags, ``lower``/``upper`` (n, 3) each
+    primitive's bounding box (inf where unbounded), ``extent`` the largest distance of the
+    geometry from the origin (inf if unbounded)."""
+
+    kind: np.ndarray
+    par: np.ndarray
+    ids: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    extent: float
+
+    @classmethod
+    def build(cls, rows: list[tuple[int, list[float], tuple[np.ndarray, np.ndarray]]],
+              ids: np.ndarray | None = None) -> Primitives:
+        """From (kind, par values, (lower, upper)) rows."""
+        n = len(rows)
+        par = np.zeros((n, PAR_WIDTH))
+        kind = np.zeros(n, np.int64)
+        lower = np.zeros((n, 3))
+        upper = np.zeros((n, 3))
+        for k, (kd, values, (lo, hi)) in enumerate(rows):
+            kind[k] = kd
+            par[k, :len(values)] = values
+            lower[k] = lo
+            upper[k] = hi
+        corners = np.concatenate([lower, upper]) if n else np.zeros((1, 3))
+        extent = float(np.max(np.linalg.norm(corners, axis=1)))
+        return cls(kind, par, np.zeros((n, 4), np.int64) if ids is None else ids, lower,
+                   upper, extent if np.isfinite(extent) else math.inf)
 
 
 class Boundary:
     """A boundary: subclass, declare ``parameters``, and give its contact geometry.
 
-    The kernels of this version handle one-sided infinite planes; a boundary made of
-    planes returns them from :meth:`planes`. ``force`` and ``torque`` hold the total
-    contact force [N] and torque about the origin [N m] that particles exert on it in the
-    last step.
+    A boundary is made of primitives (planes, finite walls, surfaces of revolution, torus
+    segments, triangles, sieve plates; :mod:`dpm.kernels.boundary_geometry`) returned by
+    :meth:`primitives` in the boundary's own frame, which is the world frame at t = 0 and
+    then moves by the boundary's ``motion`` (:mod:`dpm.motion`). A boundary made only of
+    one-sided planes may return them from :meth:`planes` instead.
+
+    ``force`` [N] and ``torque`` [N m] are the total contact force and torque that the
+    particles exert on it in the last step; the torque is taken about ``torque_point``
+    (the motion's pivot, e.g. a drum's axis; the origin if the motion has none), so that
+    ``power()`` = torque . omega + force . v gives the drive's power draw.
     """
 
     name: ClassVar[str] = ""
     parameters: ClassVar[dict[str, Parameter]] = {}
 
-    def __init__(self, material: Material, call: str | None = None, **params: Any) -> None:
+    def __init__(self, material: Material, call: str | None = None, motion: Any = None,
+                 **params: Any) -> None:
         call = call or f"{type(self).__name__}()"
         if not isinstance(material, Material):
             from ..errors import ParameterError
 
             raise ParameterError(f"{call}: material={material!r} must be a dpm.Material")
+        if motion is not None:
+            from ..motion import Motion
+
+            if not isinstance(motion, Motion):
+                from ..errors import ParameterError
+
+                raise ParameterError(f"{call}: motion={motion!r} must be a dpm.Motion "
+                                     "(dpm.Rotation, dpm.Oscillation, ...)")
         self.material = material
+        self.motion = motion
         self.params = validate(call, self.parameters, params)
         self.force = np.zeros(3)
         self.torque = np.zeros(3)
+        #: velocity of the frame origin and angular velocity at the last step (for power)
+        self.velocity = np.zeros(3)
+        self.angular_velocity = np.zeros(3)
+
+    @property
+    def torque_point(self) -> np.ndarray:
+        p = getattr(self.motion, "pivot", None)
+        return np.zeros(3) if p is None else np.asarray(p, float)
+
+    def power(self) -> float:
+        """Power [W] the particles draw from the boundary's drive in the last step
+        (-(F . v_pivot + T . omega): positive when the drive works on the particles)."""
+        from ..motion import frames
+
+        t = getattr(self, "_time", 0.0)
+        if self.motion is None:
+            return 0.0
+        fr = frames(self.motion, np.array([t]))[0]
+        v_pivot = fr[12:15] + np.cross(fr[15:18], self.torque_point - fr[0:3])
+        return -float(self.force @ v_pivot + self.torque @ fr[15:18])
+
+    def primitives(self) -> Primitives:
+        """The contact geometry in the boundary's frame (default: :meth:`planes`)."""
+        pts, nrm = self.planes()
+        rows = [(PLANE, [*p, *n], (np.full(3, -np.inf), np.full(3, np.inf)))
+                for p, n in zip(pts, nrm, strict=True)]
+        return Primitives.build(rows)
 
     def planes(self) -> tuple[np.ndarray, np.ndarray]:
         """(points (k, 3), unit normals (k, 3)) of the planes, normals into the domain."""
         return np.zeros((0, 3)), np.zeros((0, 3))
 
     def outside(self, position: np.ndarray, radius: np.ndarray) -> np.ndarray:
-        """Mask of particles whose centre lies on the wrong side of this boundary."""
+        """Mask of particles whose centre lies on the wrong side of this boundary (planes:
+        behind one; boundaries touched from both sides: none)."""
         pts, nrm = self.planes()
         if len(pts) == 0:
             return np.zeros(len(position), bool)

@@ -220,7 +220,7 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
     lo, width, dims, cell_start, order = bin_elements(e_pos, 2.0 * rmax + skin)
     counts = np.zeros(n, np.int64)
     _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, counts,
-            new_start, new_j, False)
+            new_start, new_j, n < 0)
     new_start[0] = 0
     for i in range(n):
         new_start[i + 1] = new_start[i] + counts[i]
@@ -228,53 +228,11 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
     if count > cap:
         return count
     _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, counts,
-            new_start, new_j, True)
+            new_start, new_j, n >= 0)
     _merge(nl_start, nl_j, nl_hist, nl_active, new_start, new_j, new_hist, new_active)
     _copy_back(count, new_start, new_j, new_hist, new_active, nl_start, nl_j, nl_hist,
                nl_active)
     build_transpose(nl_start, nl_j, t_start, t_pair)
-    return count
-
-
-@pjit
-def _wall_search(e_pos, e_radius, skin, w_point, w_normal, counts, out_start, out_w, fill):
-    n = e_pos.shape[0]
-    nw = w_point.shape[0]
-    for i in prange(n):
-        k = out_start[i] if fill else 0
-        for w in range(nw):
-            dist = ((e_pos[i, 0] - w_point[w, 0]) * w_normal[w, 0]
-                    + (e_pos[i, 1] - w_point[w, 1]) * w_normal[w, 1]
-                    + (e_pos[i, 2] - w_point[w, 2]) * w_normal[w, 2])
-            r = e_radius[i]
-            if dist < r + skin and dist > -r - skin:
-                if fill:
-                    out_w[k] = w
-                k += 1
-        if not fill:
-            counts[i] = k
-
-
-@jit
-def build_wall_list(e_pos, e_radius, skin, w_point, w_normal, wl_start, wl_w, wl_hist,
-                    wl_active, new_start, new_w, new_hist, new_active):
-    """Rebuild the element-plane list (planes within r + skin), merging history.
-
-    Returns the number of entries; above the capacity nothing is changed.
-    """
-    n = e_pos.shape[0]
-    counts = np.zeros(n, np.int64)
-    _wall_search(e_pos, e_radius, skin, w_point, w_normal, counts, new_start, new_w, False)
-    new_start[0] = 0
-    for i in range(n):
-        new_start[i + 1] = new_start[i] + counts[i]
-    count = new_start[n]
-    if count > new_w.shape[0]:
-        return count
-    _wall_search(e_pos, e_radius, skin, w_point, w_normal, counts, new_start, new_w, True)
-    _merge(wl_start, wl_w, wl_hist, wl_active, new_start, new_w, new_hist, new_active)
-    _copy_back(count, new_start, new_w, new_hist, new_active, wl_start, wl_w, wl_hist,
-               wl_active)
     return count
 
 

@@ -29,10 +29,16 @@ the last force evaluation.
 # ruff: noqa: I001  (the bindings block must stay between its markers)
 import math
 
+import numpy as np
+
 from numba import prange
 
 from .config import inline_jit, step_jit as jit, step_pjit as pjit
-from .neighbours import build_neighbour_list, build_wall_list
+from .boundary_geometry import TRIANGLE, in_range, touching
+from .boundary_search import boundary_motion_since_rebuild, to_local, to_world
+from .mesh_contact import resolve_triangle_contacts
+from .neighbours import _copy_back as copy_back, _merge as merge_history
+from .neighbours import build_neighbour_list
 from .rigid_rotation import rotate
 from .rolling import rolling_torque
 
@@ -40,6 +46,16 @@ from .rolling import rolling_torque
 from .law_linear import linear_spring_dashpot as law_0
 from .law_hertz_mindlin import hertz_mindlin as law_1
 from .integrate_velocity_verlet import pre_force_body, post_force_body
+from .boundary_geometry import plane_distance
+
+HAS_TRIANGLES = False
+
+
+@inline_jit
+def closest(kind, p, x, y, z, r):
+    """Contact geometry of the boundary kinds of this scene."""
+    d, nx, ny, nz = plane_distance(p, x, y, z)
+    return d, nx, ny, nz, 0
 
 
 @inline_jit
@@ -109,15 +125,16 @@ def largest(values):
 @pjit
 def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radius, e_mat,
                  e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, wl_start, wl_w, wl_hist,
-                 wl_active, wl_f, w_point, w_normal, w_vel, w_mat, pair_model, pair_params,
-                 e_worst, e_count):
-    """Pass a: contact forces of every pair and element-plane entry, stored per row.
+                 wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst, e_count):
+    """Pass a: contact forces of every pair and element-boundary entry, stored per row.
 
-    nl_f[k] = (F on i, torque on body(i), torque on body(j)); wl_f[q] = (F, torque).
+    nl_f[k] = (F on i, torque on body(i), torque on body(j)); wl_f[q] = (F, torque on the
+    body, torque on the boundary about its frame origin).
     e_worst[i], e_count[i]: largest overlap / radius and number of touching contacts.
     """
     ne = e_pos.shape[0]
     nh = nl_hist.shape[1]
+    w_kind, w_par, w_owner, w_mat, w_ids, f_cur = bnd[0], bnd[1], bnd[2], bnd[3], bnd[4], bnd[5]
     for i in prange(ne):
         xi = e_pos[i, 0]
         yi = e_pos[i, 1]
@@ -213,16 +230,29 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
             nl_f[kk, 6] = tjx
             nl_f[kk, 7] = tjy
             nl_f[kk, 8] = tjz
-        # element-plane contacts (one-sided: the normal points into the domain)
-        for q in range(wl_start[i], wl_start[i + 1]):
+        # element-boundary contacts, in each boundary's frame
+        q0 = wl_start[i]
+        q1 = wl_start[i + 1]
+        if HAS_TRIANGLES:
+            meshes = False
+            for q in range(q0, q1):
+                w = wl_w[q]
+                if w_kind[w] == TRIANGLE:
+                    meshes = True
+                    lx, ly, lz = to_local(f_cur[w_owner[w]], xi, yi, zi)
+                    dist, _, _, _, feature = closest(TRIANGLE, w_par[w], lx, ly, lz, ri)
+                    wl_tag[q] = feature if dist < ri else -1
+            if meshes:
+                resolve_triangle_contacts(q0, q1, wl_w, wl_tag, w_kind, w_owner, w_ids,
+                                          w_par, wl_active, wl_hist)
+        for q in range(q0, q1):
             w = wl_w[q]
-            nx = w_normal[w, 0]
-            ny = w_normal[w, 1]
-            nz = w_normal[w, 2]
-            dist = ((xi - w_point[w, 0]) * nx + (yi - w_point[w, 1]) * ny
-                    + (zi - w_point[w, 2]) * nz)
-            delta = ri - dist
-            if delta <= 0.0 or dist <= -ri or b_invmass[bi] == 0.0:
+            kind = w_kind[w]
+            f = f_cur[w_owner[w]]
+            lx, ly, lz = to_local(f, xi, yi, zi)
+            dist, lnx, lny, lnz, _ = closest(kind, w_par[w], lx, ly, lz, ri)
+            if (not touching(kind, dist, ri) or (kind == TRIANGLE and wl_tag[q] < 0)
+                    or b_invmass[bi] == 0.0):
                 if wl_active[q]:
                     for c in range(nh):
                         wl_hist[q, c] = 0.0
@@ -230,15 +260,27 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
                 continue
             wl_active[q] = 1
             count += 1
+            delta = ri - dist
             if delta > worst * ri:
                 worst = delta / ri
+            nx, ny, nz = to_world(f, lnx, lny, lnz)
             a = ri - 0.5 * delta
-            ax = xi - a * nx - b_pos[bi, 0]
-            ay = yi - a * ny - b_pos[bi, 1]
-            az = zi - a * nz - b_pos[bi, 2]
-            vx = b_vel[bi, 0] + b_angvel[bi, 1] * az - b_angvel[bi, 2] * ay - w_vel[w, 0]
-            vy = b_vel[bi, 1] + b_angvel[bi, 2] * ax - b_angvel[bi, 0] * az - w_vel[w, 1]
-            vz = b_vel[bi, 2] + b_angvel[bi, 0] * ay - b_angvel[bi, 1] * ax - w_vel[w, 2]
+            cx = xi - a * nx
+            cy = yi - a * ny
+            cz = zi - a * nz
+            ax = cx - b_pos[bi, 0]
+            ay = cy - b_pos[bi, 1]
+            az = cz - b_pos[bi, 2]
+            # boundary velocity at the contact point: v_o + omega x (c - o)
+            ox = cx - f[0]
+            oy = cy - f[1]
+            oz = cz - f[2]
+            vwx = f[12] + f[16] * oz - f[17] * oy
+            vwy = f[13] + f[17] * ox - f[15] * oz
+            vwz = f[14] + f[15] * oy - f[16] * ox
+            vx = b_vel[bi, 0] + b_angvel[bi, 1] * az - b_angvel[bi, 2] * ay - vwx
+            vy = b_vel[bi, 1] + b_angvel[bi, 2] * ax - b_angvel[bi, 0] * az - vwy
+            vz = b_vel[bi, 2] + b_angvel[bi, 0] * ay - b_angvel[bi, 1] * ax - vwz
             vn = vx * nx + vy * ny + vz * nz
             vtx = vx - vn * nx
             vty = vy - vn * ny
@@ -253,9 +295,11 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
             tx = ay * fz - az * fy
             ty = az * fx - ax * fz
             tz = ax * fy - ay * fx
+            # the boundary's relative angular velocity is its frame's
             if p[6] != 0.0:
-                rx, ry, rz = rolling_torque(p, fn, ri, b_mass[bi], b_angvel[bi, 0],
-                                            b_angvel[bi, 1], b_angvel[bi, 2], dt, wl_hist, q)
+                rx, ry, rz = rolling_torque(p, fn, ri, b_mass[bi], b_angvel[bi, 0] - f[15],
+                                            b_angvel[bi, 1] - f[16], b_angvel[bi, 2] - f[17],
+                                            dt, wl_hist, q)
                 tx += rx
                 ty += ry
                 tz += rz
@@ -265,6 +309,9 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
             wl_f[q, 3] = tx
             wl_f[q, 4] = ty
             wl_f[q, 5] = tz
+            wl_f[q, 6] = -(oy * fz - oz * fy)
+            wl_f[q, 7] = -(oz * fx - ox * fz)
+            wl_f[q, 8] = -(ox * fy - oy * fx)
         e_worst[i] = worst
         e_count[i] = count
 
@@ -325,8 +372,8 @@ def compute_forces(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_for
                    b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner, e_radius,
                    e_mat, e_pos,
                    nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair, wl_start, wl_w,
-                   wl_hist, wl_active, wl_f, w_point, w_normal, w_vel, w_mat, w_force,
-                   pair_model, pair_params, e_worst, e_count, diag):
+                   wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst,
+                   e_count, diag):
     """Gravity plus all contact forces (passes a, b, c), then the integrator's post-force
     part if ``integrate``; returns the largest overlap / radius. Velocity-dependent forces
     see the velocities ``b_vf``, ``b_wf`` that the integrator's pre-force part set.
@@ -336,20 +383,22 @@ def compute_forces(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_for
     """
     contact_pass(dt, b_pos, b_vf, b_wf, b_mass, b_invmass, e_owner, e_radius, e_mat,
                  e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, wl_start, wl_w, wl_hist,
-                 wl_active, wl_f, w_point, w_normal, w_vel, w_mat, pair_model, pair_params,
-                 e_worst, e_count)
+                 wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst, e_count)
     sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass,
              b_invmass, b_invinertia, b_aux, b_estart, nl_start, nl_active, nl_f, t_start, t_pair,
              wl_start, wl_active, wl_f)
-    for w in range(w_force.shape[0]):
-        for d in range(3):
-            w_force[w, d] = 0.0
+    w_owner = bnd[2]
+    f_load = bnd[8]
+    for b in range(f_load.shape[0]):
+        for d in range(6):
+            f_load[b, d] = 0.0
     ne = e_pos.shape[0]
     for q in range(wl_start[ne]):
         if wl_active[q]:
-            w = wl_w[q]
+            b = w_owner[wl_w[q]]
             for d in range(3):
-                w_force[w, d] -= wl_f[q, d]
+                f_load[b, d] -= wl_f[q, d]
+                f_load[b, 3 + d] += wl_f[q, 6 + d]
     worst = 0.0
     worst_e = -1
     active = 0
@@ -370,17 +419,25 @@ def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements,
               b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass,
               b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner, e_offset, e_radius, e_mat, e_pos,
               e_ref, nl_start, nl_j, nl_hist, nl_active, nl_f, new_start, new_j, new_hist,
-              new_active, t_start, t_pair, wl_start, wl_w, wl_hist, wl_active, wl_f,
-              wnew_start, wnew_w, wnew_hist, wnew_active, w_point, w_normal, w_vel, w_mat,
-              w_force, pair_model, pair_params, e_worst, e_count, diag):
+              new_active, t_start, t_pair, wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag,
+              wnew_start, wnew_w, wnew_hist, wnew_active, bnd, pair_model, pair_params,
+              e_worst, e_count, diag, f_table):
     """Advance ``nsteps`` steps; stop early with a status in ``diag[0]``.
 
+    ``f_table[s]`` holds the boundary frames at the end of step s (time t + (s+1) dt) for
+    moving boundaries (an empty table: none moves).
     On a list overflow the step stops after :func:`begin_step`; the caller grows the
     buffers and calls :func:`finish_step` before going on.
     """
     diag[0] = STATUS_OK
     diag[1] = 0
+    f_cur = bnd[5]
     for s in range(nsteps):
+        if f_table.shape[0] > 0:
+            row = min(s, f_table.shape[0] - 1)
+            for b in range(f_cur.shape[0]):
+                for c in range(f_cur.shape[1]):
+                    f_cur[b, c] = f_table[row, b, c]
         begin_step(dt, update_elements, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
                    b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_offset, e_pos, e_ref,
                    e_worst)
@@ -389,9 +446,9 @@ def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements,
                     b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref, nl_start, nl_j,
                     nl_hist, nl_active, nl_f, new_start, new_j, new_hist, new_active, t_start,
                     t_pair,
-                    wl_start, wl_w, wl_hist, wl_active, wl_f, wnew_start, wnew_w, wnew_hist,
-                    wnew_active, w_point, w_normal, w_vel, w_mat, w_force, pair_model,
-                    pair_params, e_worst, e_count, diag)
+                    wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, wnew_start, wnew_w,
+                    wnew_hist, wnew_active, bnd, pair_model, pair_params, e_worst, e_count,
+                    diag)
         if diag[0] == STATUS_OK or diag[0] == STATUS_OVERLAP:
             diag[1] = s + 1
         if diag[0] != STATUS_OK:
@@ -401,7 +458,7 @@ def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements,
 @jit
 def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_active,
             new_start, new_j, new_hist, new_active, t_start, t_pair, wl_start, wl_w, wl_hist,
-            wl_active, wnew_start, wnew_w, wnew_hist, wnew_active, w_point, w_normal, diag):
+            wl_active, wnew_start, wnew_w, wnew_hist, wnew_active, bnd, diag):
     """Rebuild both lists; on overflow set the status and the needed size, change nothing."""
     need = build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist,
                                 nl_active, new_start, new_j, new_hist, new_active, t_start,
@@ -410,8 +467,10 @@ def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_a
         diag[0] = STATUS_OVERFLOW
         diag[3] = need
         return
-    need = build_wall_list(e_pos, e_radius, skin, w_point, w_normal, wl_start, wl_w, wl_hist,
-                           wl_active, wnew_start, wnew_w, wnew_hist, wnew_active)
+    f_cur = bnd[5]
+    need = build_boundary_list(e_pos, e_radius, skin, f_cur, bnd[0], bnd[1], bnd[9], bnd[10],
+                               bnd[11], bnd[12], bnd[13], wl_start, wl_w, wl_hist, wl_active,
+                               wnew_start, wnew_w, wnew_hist, wnew_active)
     if need > wnew_w.shape[0]:
         diag[0] = STATUS_WALL_OVERFLOW
         diag[3] = need
@@ -419,6 +478,10 @@ def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_a
     for e in range(e_pos.shape[0]):
         for d in range(3):
             e_ref[e, d] = e_pos[e, d]
+    f_ref = bnd[6]
+    for b in range(f_ref.shape[0]):
+        for c in range(12):
+            f_ref[b, c] = f_cur[b, c]
     diag[2] += 1
 
 
@@ -427,27 +490,129 @@ def finish_step(dt, gravity, skin, max_overlap, update_elements, b_pos, b_vel, b
                 b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux,
                 b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref, nl_start, nl_j, nl_hist,
                 nl_active, nl_f, new_start, new_j, new_hist, new_active, t_start, t_pair,
-                wl_start, wl_w, wl_hist, wl_active, wl_f, wnew_start, wnew_w, wnew_hist,
-                wnew_active, w_point, w_normal, w_vel, w_mat, w_force, pair_model,
-                pair_params, e_worst, e_count, diag):
+                wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, wnew_start, wnew_w, wnew_hist,
+                wnew_active, bnd, pair_model, pair_params, e_worst, e_count, diag):
     """Steps 3-5 of a step (after :func:`begin_step`, which left each element's squared
     displacement in ``e_worst``); sets ``diag[0]`` on trouble."""
     d2 = largest(e_worst)
     if d2 != d2:
         diag[0] = STATUS_NAN
         return
-    if d2 > 0.25 * skin * skin:
+    # elements may each move skin/2 before two of them can meet unseen; an element and a
+    # boundary together may move one skin
+    moved = boundary_motion_since_rebuild(bnd[5], bnd[6], bnd[7])
+    if d2 > 0.25 * skin * skin or math.sqrt(d2) + moved > skin:
         rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_active,
                 new_start, new_j, new_hist, new_active, t_start, t_pair, wl_start, wl_w,
-                wl_hist, wl_active, wnew_start, wnew_w, wnew_hist, wnew_active, w_point,
-                w_normal, diag)
+                wl_hist, wl_active, wnew_start, wnew_w, wnew_hist, wnew_active, bnd, diag)
         if diag[0] != STATUS_OK:
             return
-    worst = compute_forces(dt, True, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
+    # (a run-time True: a literal would compile compute_forces a second time)
+    worst = compute_forces(dt, skin == skin, gravity, b_pos, b_vel, b_quat, b_angvel, b_force,
+                           b_torque,
                            b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner,
                            e_radius, e_mat,
                            e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair,
-                           wl_start, wl_w, wl_hist, wl_active, wl_f, w_point, w_normal, w_vel,
-                           w_mat, w_force, pair_model, pair_params, e_worst, e_count, diag)
+                           wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model,
+                           pair_params, e_worst, e_count, diag)
     if worst > max_overlap:
         diag[0] = STATUS_OVERLAP
+
+
+@pjit
+def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt, cell_start,
+            cell_items, prim_cells, counts, out_start, out_w, fill):
+    n = e_pos.shape[0]
+    nb = frame.shape[0]
+    for i in prange(n):
+        k = out_start[i] if fill else 0
+        k0 = k
+        r = e_radius[i]
+        reach = r + skin
+        for b in range(nb):
+            f = frame[b]
+            lx, ly, lz = to_local(f, e_pos[i, 0], e_pos[i, 1], e_pos[i, 2])
+            g = grid_int[b]
+            if g[0] == 0:
+                for w in range(g[5], g[6]):
+                    d = closest(kind[w], par[w], lx, ly, lz, r)[0]
+                    if in_range(kind[w], d, r, skin):
+                        if fill:
+                            out_w[k] = w
+                        k += 1
+                continue
+            h = grid_flt[b, 3]
+            q0 = max(int(math.floor((lx - reach - grid_flt[b, 0]) / h)), 0)
+            q1 = max(int(math.floor((ly - reach - grid_flt[b, 1]) / h)), 0)
+            q2 = max(int(math.floor((lz - reach - grid_flt[b, 2]) / h)), 0)
+            p0 = min(int(math.floor((lx + reach - grid_flt[b, 0]) / h)), g[1] - 1)
+            p1 = min(int(math.floor((ly + reach - grid_flt[b, 1]) / h)), g[2] - 1)
+            p2 = min(int(math.floor((lz + reach - grid_flt[b, 2]) / h)), g[3] - 1)
+            for cx in range(q0, p0 + 1):
+                for cy in range(q1, p1 + 1):
+                    for cz in range(q2, p2 + 1):
+                        cell = g[4] + (cx * g[2] + cy) * g[3] + cz
+                        for t in range(cell_start[cell], cell_start[cell + 1]):
+                            w = cell_items[t]
+                            pc = prim_cells[w]
+                            if (cx != max(pc[0], q0) or cy != max(pc[1], q1)
+                                    or cz != max(pc[2], q2)):
+                                continue  # found in an earlier cell of this query
+                            d = closest(kind[w], par[w], lx, ly, lz, r)[0]
+                            if in_range(kind[w], d, r, skin):
+                                if fill:
+                                    out_w[k] = w
+                                k += 1
+        if fill:
+            # grids yield primitives out of order: sort the element's slice
+            for a in range(k0 + 1, k):
+                v = out_w[a]
+                c = a - 1
+                while c >= k0 and out_w[c] > v:
+                    out_w[c + 1] = out_w[c]
+                    c -= 1
+                out_w[c + 1] = v
+        else:
+            counts[i] = k
+
+
+@jit
+def build_boundary_list(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
+                        cell_start, cell_items, prim_cells, wl_start, wl_w, wl_hist,
+                        wl_active, new_start, new_w, new_hist, new_active):
+    """Rebuild the element-primitive list (primitives within r + skin), merging history.
+
+    Returns the number of entries; above the capacity nothing is changed.
+    """
+    n = e_pos.shape[0]
+    counts = np.zeros(n, np.int64)
+    boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
+                         cell_start, cell_items, prim_cells, counts, new_start, new_w, n < 0)
+    new_start[0] = 0
+    for i in range(n):
+        new_start[i + 1] = new_start[i] + counts[i]
+    count = new_start[n]
+    if count > new_w.shape[0]:
+        return count
+    boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
+                         cell_start, cell_items, prim_cells, counts, new_start, new_w, n >= 0)
+    merge_history(wl_start, wl_w, wl_hist, wl_active, new_start, new_w, new_hist, new_active)
+    copy_back(count, new_start, new_w, new_hist, new_active, wl_start, wl_w, wl_hist,
+              wl_active)
+    return count
+
+
+@jit
+def entry_overlaps(e_pos, e_radius, wl_start, wl_w, kind, par, owner, frame):
+    """Overlap / radius of each element-primitive entry (0 where not touching); for the
+    initial-overlap check (here, so that it is cached with the step)."""
+    out = np.zeros(wl_start[e_pos.shape[0]])
+    for i in range(e_pos.shape[0]):
+        r = e_radius[i]
+        for q in range(wl_start[i], wl_start[i + 1]):
+            w = wl_w[q]
+            lx, ly, lz = to_local(frame[owner[w]], e_pos[i, 0], e_pos[i, 1], e_pos[i, 2])
+            d = closest(kind[w], par[w], lx, ly, lz, r)[0]
+            if touching(kind[w], d, r):
+                out[q] = (r - d) / r
+    return out

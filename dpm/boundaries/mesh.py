@@ -1,0 +1,140 @@
+"""Triangle-mesh boundary: any STL/OBJ/PLY that trimesh reads, or vertex/face arrays."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..kernels.boundary_geometry import TRIANGLE
+from ..parameters import Parameter
+from .base import Boundary, Primitives
+
+#: dihedral angle [rad] below which an edge counts as flat (inactive)
+FLAT_ANGLE = 1e-6
+
+
+class Mesh(Boundary):
+    """A triangle mesh from ``file`` (read by trimesh) or from ``vertices`` (n, 3) and
+    ``faces`` (m, 3), scaled by ``scale`` then shifted by ``translate``; ``thickness``
+    makes each triangle a plate (default 0, a surface).
+
+    Contact (kernel kind TRIANGLE): closest point of each triangle within reach of the
+    sphere (Ericson 2005), both sides. Shared edges and vertices are counted once
+    (:mod:`dpm.kernels.mesh_contact`): an edge between coplanar or concave neighbours
+    (seen from the side the face normals point to) and a vertex with only such edges are
+    inactive, so a sphere rolling over a flat meshed floor feels exactly the plane force.
+    Edges of one face only (open borders) and convex edges are active. Triangles are
+    found through a uniform grid in the mesh's frame, so the search cost per sphere does not
+    grow with the triangle count. Degenerate (zero-area) faces are dropped.
+    """
+
+    name = "mesh"
+    parameters = {
+        "file": Parameter(default=None, kind="any", doc="path of an STL/OBJ/PLY file"),
+        "vertices": Parameter(default=None, kind="any", unit="m"),
+        "faces": Parameter(default=None, kind="any"),
+        "scale": Parameter(default=1.0, low=0.0, low_open=True),
+        "translate": Parameter(default=(0.0, 0.0, 0.0), kind="vector", unit="m"),
+        "thickness": Parameter(default=0.0, low=0.0, unit="m"),
+    }
+
+    def __init__(self, material, call=None, **params):
+        super().__init__(material, call, **params)
+        call = call or "Mesh()"
+        p = self.params
+        import trimesh
+
+        if (p["file"] is None) == (p["vertices"] is None):
+            raise ParameterError(f"{call}: give either file or vertices and faces")
+        if p["file"] is not None:
+            try:
+                tm = trimesh.load(str(p["file"]), force="mesh")
+            except Exception as exc:  # trimesh raises many kinds
+                raise ParameterError(f"{call}: file={p['file']!r} could not be read as a "
+                                     f"mesh: {exc}") from exc
+        else:
+            v = np.asarray(p["vertices"], float)
+            f = np.asarray(p["faces"], np.int64) if p["faces"] is not None else None
+            if v.ndim != 2 or v.shape[1] != 3 or f is None or f.ndim != 2 or f.shape[1] != 3:
+                raise ParameterError(f"{call}: vertices must be (n, 3) and faces (m, 3) "
+                                     f"(got {v.shape} and "
+                                     f"{None if f is None else f.shape})")
+            if f.size and (f.min() < 0 or f.max() >= len(v)):
+                raise ParameterError(f"{call}: faces index vertices 0..{len(v) - 1}; got "
+                                     f"{f.min()}..{f.max()}")
+            tm = trimesh.Trimesh(v, f, process=False)
+        tm.merge_vertices()
+        keep = tm.area_faces > 0
+        tm.update_faces(keep)
+        if len(tm.faces) == 0:
+            raise ParameterError(f"{call}: the mesh has no triangle of non-zero area")
+        self.trimesh = tm
+        self.vertices = np.asarray(tm.vertices, float) * float(p["scale"]) + np.asarray(
+            p["translate"], float)
+        self.faces = np.asarray(tm.faces, np.int64)
+        self.h = 0.5 * float(p["thickness"])
+
+    def feature_flags(self) -> np.ndarray:
+        """Per face: bits 0-2 edge k active (v_k v_k+1), bits 3-5 vertex k active."""
+        return feature_flags(self.trimesh, self.faces, len(self.vertices))
+
+    def primitives(self) -> Primitives:
+        return triangle_primitives(self.vertices, self.faces, self.h, self.feature_flags())
+
+
+def feature_flags(tm, faces: np.ndarray, n_vertices: int) -> np.ndarray:
+    """Per face of the trimesh ``tm``: bits 0-2 edge k active (v_k v_k+1), bits 3-5 vertex
+    k active (see :class:`Mesh`)."""
+    active: dict[tuple[int, int], bool] = {}
+    count: dict[tuple[int, int], int] = {}
+    for f in faces:
+        for k in range(3):
+            e = tuple(sorted((int(f[k]), int(f[(k + 1) % 3]))))
+            count[e] = count.get(e, 0) + 1
+    for e, c in count.items():
+        active[e] = c != 2  # open borders (1) and non-manifold edges (>2) stay active
+    if len(tm.face_adjacency):
+        edges = np.sort(tm.face_adjacency_edges, axis=1)
+        angles = tm.face_adjacency_angles
+        convex = tm.face_adjacency_convex
+        for (a, b), ang, cvx in zip(edges, angles, convex, strict=True):
+            e = (int(a), int(b))
+            if count.get(e) == 2:
+                active[e] = bool(cvx and ang > FLAT_ANGLE)
+    vertex_active = np.zeros(n_vertices, bool)
+    for (a, b), on in active.items():
+        if on:
+            vertex_active[a] = vertex_active[b] = True
+    flags = np.zeros(len(faces), np.int64)
+    for n, f in enumerate(faces):
+        bits = 0
+        for k in range(3):
+            if active[tuple(sorted((int(f[k]), int(f[(k + 1) % 3]))))]:
+                bits |= 1 << k
+            if vertex_active[f[k]]:
+                bits |= 1 << (3 + k)
+        flags[n] = bits
+    return flags
+
+
+def triangle_primitives(vertices: np.ndarray, faces: np.ndarray, h: float,
+                        flags: np.ndarray) -> Primitives:
+    """TRIANGLE primitives of a mesh with half thickness ``h`` and feature ``flags``."""
+    v = vertices[faces]  # (m, 3, 3)
+    n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    m = len(faces)
+    par = np.zeros((m, 20))
+    par[:, 0:9] = v.reshape(m, 9)
+    par[:, 9] = h
+    par[:, 10:13] = n
+    ids = np.zeros((m, 4), np.int64)
+    ids[:, :3] = faces
+    ids[:, 3] = flags
+    lower = v.min(axis=1) - h
+    upper = v.max(axis=1) + h
+    extent = float(np.max(np.linalg.norm(vertices, axis=1))) + h
+    return Primitives(np.full(m, TRIANGLE, np.int64), par, ids, lower, upper,
+                      extent if math.isfinite(extent) else math.inf)

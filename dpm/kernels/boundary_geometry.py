@@ -1,0 +1,369 @@
+"""Contact geometry of boundary primitives, in the boundary's own frame.
+
+Every boundary is made of primitives. A primitive is one row of a float table ``par``
+(``PAR_WIDTH`` columns, layout per kind below) plus its kind code, all in the local frame
+of its boundary (the frame moves with the boundary's motion; the step transforms element
+centres into it). :func:`closest` returns, for a sphere centre ``(x, y, z)``:
+
+    dist     signed distance from the centre to the primitive's surface (> 0 outside;
+             the overlap of a sphere of radius r is r - dist)
+    nx,ny,nz unit normal from the surface towards the centre (the direction of the force
+             on the sphere)
+    feature  0 face, 1-3 edge (v0v1, v1v2, v2v0), 4-6 vertex v0-v2 (triangles); 0 else
+
+Kinds and their ``par`` columns:
+
+PLANE (0)     point p [0:3], unit normal n [3:6]. dist = (x - p).n, one-sided (the normal
+              points into the domain; a centre more than its radius behind is ignored).
+SLAB (1)      finite wall: centre c [0:3], unit axes u [3:6], v [6:9], half extents a [9],
+              b [10] and half thickness h [11]. A rectangular box: the closest point of the
+              box; edges and corners are rounded (distance to the closest point), a centre
+              inside the box takes the nearest face (dist < 0).
+AXI (2)       surface of revolution of a straight meridian segment: axis origin o [0:3],
+              unit axis a [3:6], segment (rho0, z0) [6:8] to (rho1, z1) [8:10], half
+              thickness h [10]. A frustum wall (tube, cone), an annulus or a disc (rho0 = 0):
+              dist = distance in the meridian plane (rho, z) to the segment, minus h; both
+              sides touch, the segment's ends are rounded edges.
+TORUS (3)     bend: centre c [0:3], unit axis a [3:6] (normal of the bend plane), unit e1
+              [6:9] (direction of angle 0; e2 = a x e1), bend radius R [9], pipe radius rp
+              [10], bend angle theta [11], half thickness h [12]. The pipe wall of the torus
+              segment 0 <= phi <= theta: the centre circle point C(phi) at the clamped angle,
+              dist = |(rho' - rp, w_t)| - h in the pipe's cross-section plane, so the pipe's
+              end rings are rounded edges; inside and outside both touch.
+TRIANGLE (4)  vertices v0 [0:3], v1 [3:6], v2 [6:9], half thickness h [9], unit face
+              normal [10:13]. Closest point of the triangle (Ericson, Real-Time Collision
+              Detection, 2005, 5.1.5) with its feature; both sides touch.
+SIEVE (5)     screen plate of a hole-clearance model: centre c [0:3], axes u [3:6], v [6:9],
+              half extents a [9], b [10], half thickness h [11], hole width wh [12], pitch
+              p [13] (hole + bar; holes centred at c + (i u + j v) p), hole shape [14]
+              (0 square, 1 round), model [15] (1 radius-dependent, 2 fixed), zeta [16].
+              Alkhaldi 2007, sec. 4.3.3, eqs. 4.20-4.24: a sphere smaller than the hole
+              whose centre lies over the reduced hole (half width wh/2 - b, b = zeta
+              (wh/2 - r) for model 1, b = zeta wh/2 for model 2) falls through; any other
+              sphere meets the plate (faces at |w| = h, rounded outline). The exact sieve
+              is a triangle mesh (:class:`dpm.boundaries.sieve.Sieve`).
+"""
+
+import math
+
+from .config import inline_jit, jit
+
+PAR_WIDTH = 20
+PLANE = 0
+SLAB = 1
+AXI = 2
+TORUS = 3
+TRIANGLE = 4
+SIEVE = 5
+
+# feature codes of triangle contacts
+FACE = 0
+
+
+@inline_jit
+def _unit_perpendicular(ax, ay, az):
+    """Some unit vector perpendicular to the unit vector a."""
+    if abs(ax) < 0.9:
+        px, py, pz = 0.0, -az, ay  # a x (1, 0, 0)
+    else:
+        px, py, pz = az, 0.0, -ax  # a x (0, 1, 0)
+    s = 1.0 / math.sqrt(px * px + py * py + pz * pz)
+    return px * s, py * s, pz * s
+
+
+@inline_jit
+def plane_distance(p, x, y, z):
+    nx = p[3]
+    ny = p[4]
+    nz = p[5]
+    return (x - p[0]) * nx + (y - p[1]) * ny + (z - p[2]) * nz, nx, ny, nz
+
+
+@inline_jit
+def slab_distance(p, x, y, z):
+    dx = x - p[0]
+    dy = y - p[1]
+    dz = z - p[2]
+    ux, uy, uz = p[3], p[4], p[5]
+    vx, vy, vz = p[6], p[7], p[8]
+    wx = uy * vz - uz * vy
+    wy = uz * vx - ux * vz
+    wz = ux * vy - uy * vx
+    s = dx * ux + dy * uy + dz * uz
+    t = dx * vx + dy * vy + dz * vz
+    w = dx * wx + dy * wy + dz * wz
+    a = p[9]
+    b = p[10]
+    h = p[11]
+    cs = min(max(s, -a), a)
+    ct = min(max(t, -b), b)
+    cw = min(max(w, -h), h)
+    es = s - cs
+    et = t - ct
+    ew = w - cw
+    d2 = es * es + et * et + ew * ew
+    if d2 > 0.0:
+        d = math.sqrt(d2)
+        inv = 1.0 / d
+        es *= inv
+        et *= inv
+        ew *= inv
+        return (d, es * ux + et * vx + ew * wx, es * uy + et * vy + ew * wy,
+                es * uz + et * vz + ew * wz)
+    # inside: leave through the nearest face
+    gs = a - abs(s)
+    gt = b - abs(t)
+    gw = h - abs(w)
+    if gw <= gs and gw <= gt:
+        sg = 1.0 if w >= 0.0 else -1.0
+        return -gw, sg * wx, sg * wy, sg * wz
+    if gs <= gt:
+        sg = 1.0 if s >= 0.0 else -1.0
+        return -gs, sg * ux, sg * uy, sg * uz
+    sg = 1.0 if t >= 0.0 else -1.0
+    return -gt, sg * vx, sg * vy, sg * vz
+
+
+@inline_jit
+def _segment_2d(r, z, r0, z0, r1, z1):
+    """Closest point of the segment (r0, z0)-(r1, z1) to (r, z): (er, ez, d) with (er, ez)
+    the unit vector from that point to (r, z) and d the distance; on the segment the
+    segment's normal (turned +90 degrees from its direction) is returned with d = 0."""
+    sr = r1 - r0
+    sz = z1 - z0
+    ll = sr * sr + sz * sz
+    t = 0.0
+    if ll > 0.0:
+        t = ((r - r0) * sr + (z - z0) * sz) / ll
+        t = min(max(t, 0.0), 1.0)
+    er = r - (r0 + t * sr)
+    ez = z - (z0 + t * sz)
+    d = math.sqrt(er * er + ez * ez)
+    if d > 0.0:
+        return er / d, ez / d, d
+    if ll > 0.0:
+        il = 1.0 / math.sqrt(ll)
+        return -sz * il, sr * il, 0.0
+    return 1.0, 0.0, 0.0
+
+
+@inline_jit
+def axi_distance(p, x, y, z):
+    dx = x - p[0]
+    dy = y - p[1]
+    dz = z - p[2]
+    ax, ay, az = p[3], p[4], p[5]
+    zz = dx * ax + dy * ay + dz * az
+    rx = dx - zz * ax
+    ry = dy - zz * ay
+    rz = dz - zz * az
+    rho = math.sqrt(rx * rx + ry * ry + rz * rz)
+    if rho > 1e-300:
+        inv = 1.0 / rho
+        rx *= inv
+        ry *= inv
+        rz *= inv
+    else:
+        rx, ry, rz = _unit_perpendicular(ax, ay, az)
+    er, ez, d = _segment_2d(rho, zz, p[6], p[7], p[8], p[9])
+    return (d - p[10], er * rx + ez * ax, er * ry + ez * ay, er * rz + ez * az)
+
+
+@inline_jit
+def torus_distance(p, x, y, z):
+    dx = x - p[0]
+    dy = y - p[1]
+    dz = z - p[2]
+    ax, ay, az = p[3], p[4], p[5]
+    e1x, e1y, e1z = p[6], p[7], p[8]
+    e2x = ay * e1z - az * e1y
+    e2y = az * e1x - ax * e1z
+    e2z = ax * e1y - ay * e1x
+    big_r = p[9]
+    rp = p[10]
+    theta = p[11]
+    px = dx * e1x + dy * e1y + dz * e1z
+    py = dx * e2x + dy * e2y + dz * e2z
+    pz = dx * ax + dy * ay + dz * az
+    phi = math.atan2(py, px)
+    if phi < 0.0:
+        phi += 2.0 * math.pi
+    if phi > theta:  # outside the segment: the nearer end ring
+        phi = theta if phi - theta < 2.0 * math.pi - phi else 0.0
+    c = math.cos(phi)
+    s = math.sin(phi)
+    # pipe centre and tangent at phi, in (e1, e2, a) coordinates
+    wx = px - big_r * c
+    wy = py - big_r * s
+    wz = pz
+    tx = -s
+    ty = c
+    wt = wx * tx + wy * ty
+    qx = wx - wt * tx
+    qy = wy - wt * ty
+    qz = wz
+    rho = math.sqrt(qx * qx + qy * qy + qz * qz)
+    if rho > 1e-300:
+        inv = 1.0 / rho
+        qx *= inv
+        qy *= inv
+        qz *= inv
+    else:
+        qx, qy, qz = c, s, 0.0
+    er = rho - rp
+    d = math.sqrt(er * er + wt * wt)
+    if d > 0.0:
+        er /= d
+        et = wt / d
+    else:
+        er = 1.0
+        et = 0.0
+    # local normal in (e1, e2, a), then to the boundary frame
+    lx = er * qx + et * tx
+    ly = er * qy + et * ty
+    lz = er * qz
+    return (d - p[12], lx * e1x + ly * e2x + lz * ax, lx * e1y + ly * e2y + lz * ay,
+            lx * e1z + ly * e2z + lz * az)
+
+
+@inline_jit
+def triangle_closest(p, x, y, z):
+    """Closest point (qx, qy, qz) of the triangle p[0:9] to (x, y, z) and its feature."""
+    ax, ay, az = p[0], p[1], p[2]
+    bx, by, bz = p[3], p[4], p[5]
+    cx, cy, cz = p[6], p[7], p[8]
+    abx, aby, abz = bx - ax, by - ay, bz - az
+    acx, acy, acz = cx - ax, cy - ay, cz - az
+    apx, apy, apz = x - ax, y - ay, z - az
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    if d1 <= 0.0 and d2 <= 0.0:
+        return ax, ay, az, 4
+    bpx, bpy, bpz = x - bx, y - by, z - bz
+    d3 = abx * bpx + aby * bpy + abz * bpz
+    d4 = acx * bpx + acy * bpy + acz * bpz
+    if d3 >= 0.0 and d4 <= d3:
+        return bx, by, bz, 5
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        v = d1 / (d1 - d3)
+        return ax + v * abx, ay + v * aby, az + v * abz, 1
+    cpx, cpy, cpz = x - cx, y - cy, z - cz
+    d5 = abx * cpx + aby * cpy + abz * cpz
+    d6 = acx * cpx + acy * cpy + acz * cpz
+    if d6 >= 0.0 and d5 <= d6:
+        return cx, cy, cz, 6
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        w = d2 / (d2 - d6)
+        return ax + w * acx, ay + w * acy, az + w * acz, 3
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        return bx + w * (cx - bx), by + w * (cy - by), bz + w * (cz - bz), 2
+    den = 1.0 / (va + vb + vc)
+    v = vb * den
+    w = vc * den
+    return (ax + abx * v + acx * w, ay + aby * v + acy * w, az + abz * v + acz * w, FACE)
+
+
+@inline_jit
+def triangle_distance(p, x, y, z):
+    qx, qy, qz, feature = triangle_closest(p, x, y, z)
+    ex = x - qx
+    ey = y - qy
+    ez = z - qz
+    d = math.sqrt(ex * ex + ey * ey + ez * ez)
+    fnx, fny, fnz = p[10], p[11], p[12]
+    if d > 0.0:
+        inv = 1.0 / d
+        ex *= inv
+        ey *= inv
+        ez *= inv
+        # a closest point on an edge or vertex whose direction is the face normal lies on
+        # the face's rim: it is a face contact (the neighbour gives the same point)
+        if feature != FACE and abs(ex * fnx + ey * fny + ez * fnz) > 1.0 - 1e-12:
+            feature = FACE
+        return d - p[9], ex, ey, ez, feature
+    return -p[9], fnx, fny, fnz, FACE
+
+
+@inline_jit
+def sieve_distance(p, x, y, z, r):
+    """Distance to a sieve plate of a clearance model (see the module docstring); ``r`` the
+    sphere radius (used by the radius-dependent model)."""
+    dx = x - p[0]
+    dy = y - p[1]
+    dz = z - p[2]
+    ux, uy, uz = p[3], p[4], p[5]
+    vx, vy, vz = p[6], p[7], p[8]
+    wx = uy * vz - uz * vy
+    wy = uz * vx - ux * vz
+    wz = ux * vy - uy * vx
+    s = dx * ux + dy * uy + dz * uz
+    t = dx * vx + dy * vy + dz * vz
+    w = dx * wx + dy * wy + dz * wz
+    a = p[9]
+    b = p[10]
+    h = p[11]
+    wh = p[12]
+    pitch = p[13]
+    shape = int(p[14])
+    model = int(p[15])
+    # beyond the plate's outline: a rounded slab edge
+    if abs(s) > a or abs(t) > b:
+        return slab_distance(p, x, y, z)
+    # position relative to the centre of the pitch cell's hole
+    hs = s - pitch * math.floor(s / pitch + 0.5)
+    ht = t - pitch * math.floor(t / pitch + 0.5)
+    sg = 1.0 if w >= 0.0 else -1.0
+    half = 0.5 * wh
+    if r < half:
+        clear = p[16] * (half - r) if model == 1 else p[16] * half
+        reduced = half - clear
+        if shape == 1:
+            inside = hs * hs + ht * ht < reduced * reduced
+        else:
+            inside = abs(hs) < reduced and abs(ht) < reduced
+        if inside:
+            return 1e30, sg * wx, sg * wy, sg * wz
+    return abs(w) - h, sg * wx, sg * wy, sg * wz
+
+
+@jit
+def closest_any(kind, p, x, y, z, r):
+    """(dist, nx, ny, nz, feature) of a sphere of radius r centred at (x, y, z), for any
+    kind (tests and tools; the step compiles a ``closest`` of the scene's kinds only)."""
+    if kind == PLANE:
+        d, nx, ny, nz = plane_distance(p, x, y, z)
+        return d, nx, ny, nz, 0
+    if kind == SLAB:
+        d, nx, ny, nz = slab_distance(p, x, y, z)
+        return d, nx, ny, nz, 0
+    if kind == AXI:
+        d, nx, ny, nz = axi_distance(p, x, y, z)
+        return d, nx, ny, nz, 0
+    if kind == TORUS:
+        d, nx, ny, nz = torus_distance(p, x, y, z)
+        return d, nx, ny, nz, 0
+    if kind == TRIANGLE:
+        return triangle_distance(p, x, y, z)
+    d, nx, ny, nz = sieve_distance(p, x, y, z, r)
+    return d, nx, ny, nz, 0
+
+
+@inline_jit
+def in_range(kind, dist, r, reach):
+    """Whether a primitive at ``dist`` belongs in the wall list of a sphere of radius r:
+    within r + reach in front (planes: and not more than r + reach behind)."""
+    if kind == PLANE:
+        return -r - reach < dist < r + reach
+    return dist < r + reach
+
+
+@inline_jit
+def touching(kind, dist, r):
+    """Whether a sphere of radius r at ``dist`` overlaps the primitive."""
+    if kind == PLANE:
+        return -r < dist < r
+    return dist < r
