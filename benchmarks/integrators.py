@@ -222,6 +222,7 @@ def hopper_scene(n: int, seed: int = 1) -> dict:
     """A flat hopper: funnel of two inclined planes (60 deg from horizontal) with an
     outlet of 6 mean diameters, front and back planes 1.1 d_max apart; particles placed
     on a jittered grid above the funnel, radii uniform in [4, 6] mm."""
+    tan60 = math.tan(math.radians(60))
     rng = np.random.default_rng(seed)
     dmax = 12e-3
     cols = 20
@@ -234,10 +235,32 @@ def hopper_scene(n: int, seed: int = 1) -> dict:
         for c in range(cols):
             if len(pos) < n:
                 pos.append([x[c] + rng.uniform(-0.02, 0.02) * dmax, 0.0,
-                            0.35 * width + 0.02 + r * pitch])
+                            tan60 * (width / 2 - 0.03) + 0.03 + r * pitch])
     radii = rng.uniform(4e-3, 6e-3, n)
     return dict(positions=np.array(pos), radii=radii, width=width, outlet=6 * 10e-3,
                 depth=1.1 * dmax)
+
+
+def park(sim: dpm.Simulation, idx: np.ndarray) -> None:
+    """Move particles that left through the outlet far away, at rest and apart (planes are
+    infinite: below the outlet the funnel planes go on and would catch them), and reset
+    the integrator's per-body history of those particles."""
+    b = sim.bodies
+    b.position[idx] = np.c_[10.0 + 0.05 * idx, np.zeros(len(idx)), np.full(len(idx), -10.0)]
+    b.velocity[idx] = 0.0
+    b.angular_velocity[idx] = 0.0
+    b.force[idx] = b.mass[idx, None] * sim.gravity
+    b.torque[idx] = 0.0
+    name = sim.integrator.name
+    aux = sim._aux
+    if name == "position_verlet":
+        aux[idx, 3:6] = np.nan  # != velocity: the kernel restarts the difference
+    elif name in ("gear4", "gear5"):
+        aux[idx] = 0.0
+        aux[idx, 0:3] = sim.gravity
+    elif name == "numerov":
+        aux[idx, 0:3] = b.position[idx]
+        aux[idx, 3:6] = sim.gravity
 
 
 def hopper(integrator: str, dt: float, scene: dict, duration: float) -> dict:
@@ -275,6 +298,9 @@ def hopper(integrator: str, dt: float, scene: dict, duration: float) -> dict:
             p = sim.bodies.position
             out = (p[:, 2] < -0.02) & np.isnan(exit_time)
             exit_time[out] = sim.time
+            gone = np.flatnonzero(~np.isnan(exit_time))
+            if len(gone):
+                park(sim, gone)
             # inside the walls: not behind a funnel plane or the front/back planes by
             # more than a radius while above the outlet
             above = p[:, 2] > 0.0
@@ -302,7 +328,7 @@ def study_hopper(quick: bool) -> dict:
     scene = hopper_scene(n)
     m = 7850 * 4 / 3 * math.pi * 4e-3**3
     tc = math.pi / math.sqrt(1000.0 / (m / 2))
-    crs = [50, 25, 10, 5, 3.2, 2.7, 2.0] if not quick else [25, 5, 2.7]
+    crs = [50, 25, 10, 7, 5, 3.2] if not quick else [25, 10, 7, 5]
     integs = ["velocity_verlet", "position_verlet", "gear4", "newmark_beta", "numerov"]
     if quick:
         integs = ["velocity_verlet", "position_verlet", "newmark_beta", "numerov"]
@@ -347,7 +373,7 @@ def plot(res: dict, path: Path) -> None:
                       ms=3, color=colours[integ], label=integ)
         ax.set_xlabel("CPU time per collision [s]")
         ax.set_ylabel("position error after contact / largest overlap")
-        ax.set_title("work-precision: linear collision")
+        ax.set_title("work-precision: linear collision (CPU: one run() call per step)")
         ax.legend(fontsize=7)
     if "sandwich" in res:
         ax = axes[1, 0]
@@ -364,8 +390,8 @@ def plot(res: dict, path: Path) -> None:
         ax = axes[1, 1]
         d = res["detection"]
         for integ, by in d["by_phase"].items():
-            ax.plot(d["phases"], by["1.3"], style.get(integ, "-"), marker="o", ms=3,
-                    color=colours[integ], label=f"{integ} CR 1.3")
+            ax.plot(d["phases"], by["2"], style.get(integ, "-"), marker="o", ms=3,
+                    color=colours[integ], label=f"{integ} CR 2")
         ax.axhline(1.0, color="k", lw=0.5)
         ax.set_xlabel("fraction of the step before the contact starts")
         ax.set_ylabel("largest overlap / exact")
