@@ -18,6 +18,7 @@ if "NUMBA_THREADING_LAYER" not in _os.environ:
 
 from .boundaries import Boundary
 from .errors import DpmError, ParameterError, SceneError, UnknownNameError, UnstableRunError
+from .flow import Inlet, Outlet
 from .hookspecs import hookimpl
 from .impact import ImpactModel
 from .integrators import Integrator
@@ -33,13 +34,15 @@ from .motion import (
     Tumbling,
 )
 from .plugins import register, registry
+from .regions import BoxRegion, CylinderRegion, Region
 from .scene_tools import lattice
 from .shapes import Shape
 from .simulation import Simulation
 
 __all__ = [
-    "Boundary", "Compose", "DpmError", "ImpactModel", "Integrator", "Material", "Motion",
-    "Oscillation", "ParameterError", "Rotation", "SceneError", "Shape", "Simulation",
-    "Translation", "TriangularOscillation", "Tumbling", "UnknownNameError",
-    "UnstableRunError", "hookimpl", "lattice", "load", "register", "registry", "__version__",
+    "Boundary", "BoxRegion", "Compose", "CylinderRegion", "DpmError", "hookimpl",
+    "ImpactModel", "Inlet", "Integrator", "lattice", "load", "Material", "Motion",
+    "Oscillation", "Outlet", "ParameterError", "Region", "register", "registry", "Rotation",
+    "SceneError", "Shape", "Simulation", "Translation", "TriangularOscillation", "Tumbling",
+    "UnknownNameError", "UnstableRunError", "__version__",
 ]

@@ -62,3 +62,14 @@ def dpm_after_step(sim: Simulation) -> None:
 @hookspec
 def dpm_on_output(sim: Simulation, frame: int, path: Any) -> None:
     """Called after each output frame is written and flushed."""
+
+
+@hookspec
+def dpm_on_particles_inserted(sim: Simulation, inlet: Any, ids: Any) -> None:
+    """An inlet has just inserted the bodies ``ids`` (numpy int64 array)."""
+
+
+@hookspec
+def dpm_on_particles_removed(sim: Simulation, outlet: Any, records: Any) -> None:
+    """An outlet has just removed bodies; ``records`` is a dict of arrays: id, time, mass,
+    residence_time, position (n, 3), velocity (n, 3)."""

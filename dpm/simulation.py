@@ -15,6 +15,7 @@ import numpy as np
 from . import plan as _plan
 from .boundaries.base import Boundary
 from .errors import ParameterError, SceneError, UnstableRunError
+from .flow import Inlet, Outlet, random_quaternions
 from .impact.base import ImpactModel, PairContext
 from .kernels.step import (
     STATUS_NAN,
@@ -27,6 +28,7 @@ from .material import Material
 from .motion import frames
 from .parameters import Parameter, validate
 from .plugins import registry
+from .regions import Region
 from .shapes.base import Shape
 from .state import Bodies, BoundaryTable, Contacts, Elements, WallContacts
 from .timestep import TimeStepReport
@@ -115,6 +117,8 @@ class Simulation:
         self.materials: list[Material] = []
         self._contacts: dict[tuple[int, int], ImpactModel] = {}
         self.boundaries: list[Boundary] = []
+        self.inlets: list[Inlet] = []
+        self.outlets: list[Outlet] = []
         self.bodies = Bodies()
         self.elements = Elements()
         self.contacts = Contacts()
@@ -229,7 +233,7 @@ class Simulation:
             force=np.zeros((n, 3)), torque=np.zeros((n, 3)), mass=batch.mass,
             inertia=batch.inertia, invmass=1.0 / batch.mass, invinertia=1.0 / batch.inertia,
             radius=batch.bounding_radius, material=np.full(n, imat),
-            shape=np.zeros(n, np.int64))
+            shape=np.zeros(n, np.int64), birth=np.full(n, self.time))
         b = self.bodies
         b.element_start = np.concatenate(
             [b.element_start, b.element_start[-1] + np.cumsum(batch.element_count)])
@@ -239,6 +243,159 @@ class Simulation:
         self._prepared = False
         self._forces_valid = False
         return ids
+
+    def add_inlet(self, region: Region, material: Material, **params: Any) -> Inlet:
+        """Insert particles during the run (:class:`dpm.flow.Inlet`: ``rate`` or
+        ``mass_rate``, ``shapes`` mix or ``shape`` + parameters, ``velocity``, ``start``,
+        ``stop``, ``every``, ``seed``); return the inlet."""
+        self._material_index(material, "sim.add_inlet()")
+        inlet = Inlet(region, material, **params)
+        self.inlets.append(inlet)
+        return inlet
+
+    def add_outlet(self, region: Region, remove: str = "inside", every: float = 1e-3,
+                   name: str = "") -> Outlet:
+        """Remove particles whose centre is inside (or outside) ``region`` every ``every``
+        seconds, recording them (:class:`dpm.flow.Outlet`); return the outlet."""
+        outlet = Outlet(region, remove=remove, every=every, name=name)
+        self.outlets.append(outlet)
+        return outlet
+
+    def remove_particles(self, ids: np.ndarray | Sequence[int]) -> dict[str, np.ndarray]:
+        """Remove the bodies with these ids now; return their records (id, time, mass,
+        residence_time, position, velocity). Contact history of the others is kept."""
+        b, e = self.bodies, self.elements
+        gone = np.isin(b.id, np.asarray(ids, np.int64))
+        rec = {"id": b.id[gone].copy(), "time": np.full(int(gone.sum()), self.time),
+               "mass": b.mass[gone].copy(), "residence_time": self.time - b.birth[gone],
+               "position": b.position[gone].copy(), "velocity": b.velocity[gone].copy()}
+        if not np.any(gone):
+            return rec
+        keep_b = ~gone
+        keep_e = keep_b[e.owner]
+        new_b = np.cumsum(keep_b) - 1
+        new_e = np.cumsum(keep_e) - 1
+        if self._prepared:
+            self.contacts.keep_rows(keep_e, new_e, True)
+            self.wall_contacts.keep_rows(keep_e, new_e, False)
+            self._aux = np.ascontiguousarray(self._aux[keep_b])
+        b.keep(keep_b)
+        e.keep(keep_e, new_b)
+        if self._prepared:
+            self._population_changed()
+        return rec
+
+    def _population_changed(self) -> None:
+        """After bodies were inserted or removed during a run: resize the per-element
+        arrays (keeping the contact lists and their history), rebuild, recompute forces."""
+        b, e = self.bodies, self.elements
+        n_el = len(e)
+        self._spheres_only = bool(len(e) == len(b) and np.all(e.offset == 0.0)
+                                  and np.array_equal(e.owner, np.arange(len(b))))
+        if self._spheres_only:
+            e.position = b.position
+        elif len(b):
+            self._module.update_element_positions(b.position, b.orientation, b.element_start,
+                                                  e.offset, e.position)
+        self.contacts.resize_rows(n_el)
+        self.wall_contacts.resize_rows(n_el)
+        self._e_worst = np.zeros(n_el)
+        self._e_count = np.zeros(n_el, np.int64)
+        self._vf = np.zeros((len(b), 3))
+        self._wf = np.zeros((len(b), 3))
+        if len(self._aux) < len(b):
+            extra = np.zeros((len(b) - len(self._aux), self._aux.shape[1]))
+            self._aux = np.ascontiguousarray(np.concatenate([self._aux, extra]))
+        e.reference = np.full((n_el, 3), np.inf)
+        self._rebuild()
+        self._prime_forces()
+        self._update_boundary_loads()
+        self._prepared = True
+
+    def _flow_event(self) -> None:
+        """Outlets, then inlets, at the current time."""
+        hooks = self._registry.manager.hook
+        changed = False
+        prepared = self._prepared
+        for outlet in self.outlets:
+            if len(self.bodies) == 0:
+                break
+            sel = outlet.select(self.bodies.position)
+            if np.any(sel):
+                rec = self.remove_particles(self.bodies.id[sel])
+                outlet.record(rec)
+                if self._writer is not None:
+                    self._writer.write_removed(rec, self.outlets.index(outlet))
+                hooks.dpm_on_particles_removed(sim=self, outlet=outlet, records=rec)
+        for inlet in self.inlets:
+            ids = self._insert(inlet)
+            if len(ids):
+                changed = True
+                hooks.dpm_on_particles_inserted(sim=self, inlet=inlet, ids=ids)
+        if changed and prepared:
+            self._population_changed()
+
+    def _insert(self, inlet: Inlet) -> np.ndarray:
+        """Place what ``inlet`` owes now; return the new ids."""
+        from scipy.spatial import cKDTree
+
+        from .kernels.boundary_search import boundary_gaps
+
+        owed = inlet.owed(self.time + inlet.every)  # what the coming interval brings
+        by_mass = inlet.mass_rate is not None
+        if (owed < 1.0 and not by_mass) or owed <= 0.0:
+            return np.zeros(0, np.int64)
+        b = self.bodies
+        tree = cKDTree(b.position) if len(b) else None
+        rmax = float(b.radius.max()) if len(b) else 0.0
+        if self.walls is None or len(self.walls.frame) != len(self.boundaries):
+            table = BoundaryTable(self.boundaries, lambda m: self._material_index(m, ""), 1.0)
+            for k, bd in enumerate(self.boundaries):
+                table.frame[k] = frames(bd.motion, np.array([self.time]))[0]
+        else:
+            table = self.walls
+        placed_pos: list[np.ndarray] = []
+        placed_r: list[float] = []
+        new_ids = []
+        while (owed >= 1.0) if not by_mass else (owed > 0.0):
+            name, params = inlet.draw()
+            cls = self._registry.lookup("shape", name, "sim.add_inlet()")
+            sh = cls(call="sim.add_inlet()", **params)
+            batch = sh.build(1, inlet.material.density)
+            rb = float(batch.bounding_radius[0])
+            cand = inlet.region.sample(inlet.rng, inlet.max_attempts, rb)
+            ok = np.ones(len(cand), bool)
+            if tree is not None:
+                for k, hits in enumerate(tree.query_ball_point(cand, rb + rmax)):
+                    if hits:
+                        d = np.linalg.norm(b.position[hits] - cand[k], axis=1)
+                        ok[k] = bool(np.all(d >= rb + b.radius[hits]))
+            if placed_pos:
+                pp = np.asarray(placed_pos)
+                d = np.linalg.norm(cand[:, None, :] - pp[None], axis=2)
+                ok &= np.all(d >= rb + np.asarray(placed_r)[None], axis=1)
+            if len(table.kind) and np.any(ok):
+                gaps = boundary_gaps(cand, np.full(len(cand), rb), table.frame, table.kind,
+                                     table.par, table.owner)
+                ok &= gaps >= 0.0
+            if not np.any(ok):
+                break  # the region is full for now: the rest stays owed
+            p = cand[int(np.argmax(ok))]
+            q = (random_quaternions(inlet.rng, 1) if inlet.random_orientation
+                 else np.array([[1.0, 0, 0, 0]]))
+            ids = self.add_particles(sh, inlet.material, positions=p[None],
+                                     velocities=inlet.velocity[None], orientations=q)
+            new_ids.append(ids)
+            placed_pos.append(p)
+            placed_r.append(rb)
+            m = float(batch.mass[0])
+            owed -= m if by_mass else 1.0
+            inlet.inserted += 1
+            inlet.inserted_mass += m
+        inlet._due = owed
+        out = np.concatenate(new_ids) if new_ids else np.zeros(0, np.int64)
+        inlet.ids.append(out)
+        return out
 
     def output(self, path: str, every: float | None = None,
                every_steps: int | None = None) -> None:
@@ -543,6 +700,8 @@ class Simulation:
             validate("sim.run()", {"until": Parameter(low=self.time, unit="s")},
                      {"until": until})
         if not self._prepared:
+            if self.inlets and self.step_count == 0 and not self._forces_valid:
+                self._flow_event()  # an inlet may fill an empty scene
             self._prepare()
         if steps is not None:
             nsteps = int(steps)
@@ -579,6 +738,8 @@ class Simulation:
             self._writer = Writer(self._output_path, self)
             self.last_output = self._writer
             self._write_frame()
+        flows = self.inlets + self.outlets
+        flow_every = (max(1, round(min(f.every for f in flows) / self.dt)) if flows else 0)
         done = 0
         chunk = 10
         try:
@@ -588,6 +749,8 @@ class Simulation:
                     n = 1
                 if self._writer is not None:
                     n = min(n, self._output_every - self.step_count % self._output_every)
+                if flow_every:
+                    n = min(n, flow_every - self.step_count % flow_every)
                 if per_step_hooks:
                     hooks.dpm_before_step(sim=self)
                 t0 = _time.perf_counter()
@@ -596,6 +759,8 @@ class Simulation:
                 done += ran
                 if per_step_hooks:
                     hooks.dpm_after_step(sim=self)
+                if flow_every and self.step_count % flow_every == 0:
+                    self._flow_event()
                 if self._writer is not None and self.step_count % self._output_every == 0:
                     self._write_frame()
                 bar.update(ran, self.time)

@@ -16,9 +16,15 @@ class Bodies:
     id (n,) int64 unique and stable; position, velocity, angular_velocity, force, torque
     (n, 3); orientation (n, 4) unit quaternion (w, x, y, z), body frame = principal frame;
     mass (n,); inertia (n, 3) principal moments; invmass, invinertia (0 for fixed bodies);
-    material, shape (n,) int64 indices; radius (n,) bounding radius; element_start
-    (n + 1,): the elements of body b are element_start[b] : element_start[b + 1].
+    material, shape (n,) int64 indices; radius (n,) bounding radius; birth (n,) time of
+    insertion [s]; element_start (n + 1,): the elements of body b are
+    element_start[b] : element_start[b + 1].
     """
+
+    #: every per-body array (one row per body)
+    ARRAYS = ("id", "position", "velocity", "angular_velocity", "force", "torque", "inertia",
+              "invinertia", "orientation", "mass", "invmass", "radius", "material", "shape",
+              "birth")
 
     FIELDS3 = ("position", "velocity", "angular_velocity", "force", "torque", "inertia",
                "invinertia")
@@ -33,6 +39,7 @@ class Bodies:
         self.radius = np.zeros(0)
         self.material = np.zeros(0, np.int64)
         self.shape = np.zeros(0, np.int64)
+        self.birth = np.zeros(0)
         self.element_start = np.zeros(1, np.int64)
 
     def __len__(self) -> int:
@@ -43,6 +50,13 @@ class Bodies:
             old = getattr(self, name)
             new = np.concatenate([old, np.asarray(value).astype(old.dtype)])
             setattr(self, name, np.ascontiguousarray(new))
+
+    def keep(self, mask: np.ndarray) -> None:
+        """Keep only the bodies where ``mask`` is True (element_start recomputed)."""
+        counts = np.diff(self.element_start)[mask]
+        for name in self.ARRAYS:
+            setattr(self, name, np.ascontiguousarray(getattr(self, name)[mask]))
+        self.element_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
 
 
 class Elements:
@@ -66,6 +80,13 @@ class Elements:
         self.material = np.concatenate([self.material, material.astype(np.int64)])
         self.position = np.zeros((len(self.owner), 3))
         self.reference = np.full((len(self.owner), 3), np.inf)  # forces a rebuild
+
+    def keep(self, mask: np.ndarray, new_owner: np.ndarray) -> None:
+        """Keep the elements where ``mask`` is True; ``new_owner`` maps old body indices
+        to new ones."""
+        self.owner = np.ascontiguousarray(new_owner[self.owner[mask]])
+        for name in ("offset", "radius", "material", "position", "reference"):
+            setattr(self, name, np.ascontiguousarray(getattr(self, name)[mask]))
 
 
 class _CsrList:
@@ -99,6 +120,35 @@ class _CsrList:
     def count(self) -> int:
         return int(self.start[-1])
 
+    def resize_rows(self, n_elements: int) -> None:
+        """Give new elements (appended) empty rows; the list stays as it is."""
+        old = len(self.start) - 1
+        if n_elements > old:
+            self.start = np.concatenate([self.start, np.full(n_elements - old,
+                                                             self.start[-1])])
+        self.new_start = np.zeros(n_elements + 1, np.int64)
+
+    def keep_rows(self, keep: np.ndarray, new_index: np.ndarray, remap_keys: bool) -> None:
+        """Drop the rows of removed elements (``keep`` False) and, if ``remap_keys``
+        (element pairs), the entries whose partner is removed; renumber by
+        ``new_index``. Order is kept, so each row stays sorted."""
+        n = len(self.start) - 1
+        cnt = self.count
+        rows = np.repeat(np.arange(n), np.diff(self.start))
+        keys = self.key[:cnt]
+        valid = keep[rows] & (keep[keys] if remap_keys else True)
+        m = int(valid.sum())
+        new_keys = new_index[keys[valid]] if remap_keys else keys[valid]
+        hist = self.history[:cnt][valid]
+        act = self.active[:cnt][valid]
+        self.key[:m] = new_keys
+        self.history[:m] = hist
+        self.active[:m] = act
+        n_new = int(keep.sum())
+        counts = np.bincount(new_index[rows[valid]], minlength=n_new)
+        self.start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        self.new_start = np.zeros(n_new + 1, np.int64)
+
     def grow(self, needed: int) -> None:
         """Enlarge the buffers to hold ``needed`` entries (with headroom); keep the list."""
         n = self.count
@@ -124,6 +174,14 @@ class Contacts(_CsrList):
 
     def grow(self, needed: int) -> None:
         super().grow(needed)  # t_pair is rebuilt with the list
+
+    def resize_rows(self, n_elements: int) -> None:
+        super().resize_rows(n_elements)
+        self.t_start = np.zeros(n_elements + 1, np.int64)  # rebuilt with the list
+
+    def keep_rows(self, keep, new_index, remap_keys) -> None:
+        super().keep_rows(keep, new_index, remap_keys)
+        self.t_start = np.zeros(len(self.start), np.int64)
 
     @property
     def pair_count(self) -> int:

@@ -34,6 +34,10 @@ FIELDS = {
 }
 #: per-element fields of clustered bodies: name -> (width, dtype)
 ELEMENT_FIELDS = {"position": (3, "f8"), "radius": (0, "f8"), "body_id": (0, "i8")}
+#: records of removed bodies (outlets): name -> (width, dtype)
+REMOVED_FIELDS = {"id": (0, "i8"), "time": (0, "f8"), "mass": (0, "f8"),
+                  "residence_time": (0, "f8"), "position": (3, "f8"), "velocity": (3, "f8"),
+                  "outlet": (0, "i4")}
 XDMF_INTERVAL_S = 5.0
 
 
@@ -80,7 +84,14 @@ class Writer:
         for name in ("force", "torque"):
             bg.create_dataset(name, shape=(0, nb, 3), maxshape=(None, nb, 3), dtype="f8",
                               chunks=(64, nb, 3))
+        rg = f.create_group("removed")
+        for name, (width, dtype) in REMOVED_FIELDS.items():
+            shape = (0, width) if width else (0,)
+            maxshape = (None, width) if width else (None,)
+            chunk = (1024, width) if width else (1024,)
+            rg.create_dataset(name, shape=shape, maxshape=maxshape, dtype=dtype, chunks=chunk)
         f.swmr_mode = True
+        self.removed = 0
         self.frames = 0
         self.rows = 0
         self.element_rows = 0
@@ -130,6 +141,20 @@ class Writer:
             self.write_xdmf()
             self._last_xdmf = now
 
+    def write_removed(self, records: dict[str, np.ndarray], outlet: int) -> None:
+        """Append the records of bodies an outlet removed (``id`` extended last)."""
+        n = len(records["id"])
+        if n == 0:
+            return
+        rg = self.file["removed"]
+        values = dict(records, outlet=np.full(n, outlet))
+        for name in [k for k in REMOVED_FIELDS if k != "id"] + ["id"]:
+            ds = rg[name]
+            ds.resize(self.removed + n, axis=0)
+            ds[self.removed:self.removed + n] = values[name]
+        self.removed += n
+        self.file.flush()
+
     def write_xdmf(self) -> None:
         from .xdmf import write_xdmf_from_arrays
 
@@ -171,6 +196,12 @@ class Run:
             self.count = f["frames/count"][:n]
             self.boundary_force = f["boundaries/force"][:n]
             self.boundary_torque = f["boundaries/torque"][:n]
+            #: bodies removed by outlets: id, time, mass, residence_time, position,
+            #: velocity, outlet (index in sim.outlets)
+            self.removed: dict[str, np.ndarray] = {}
+            if "removed" in f:
+                m = len(f["removed/id"])
+                self.removed = {k: f["removed"][k][:m] for k in REMOVED_FIELDS}
 
     def __len__(self) -> int:
         return len(self.times)
