@@ -80,12 +80,26 @@ class ImplicitIntegrator(Integrator):
                             "supported; clustered bodies need an explicit integrator")
         if np.any(b.invmass == 0.0):
             problems.append("bodies of infinite mass are not supported")
+        pts, nrm, mats, owners = [np.zeros((0, 3))], [np.zeros((0, 3))], [], []
         for k, bd in enumerate(sim.boundaries):
             if bd.name not in PLANE_KINDS:
                 problems.append(f"boundary {k} ({bd.name}) is not supported; allowed: "
                                 + ", ".join(PLANE_KINDS))
-        if sim.walls is not None and len(sim.walls.velocity) and np.any(sim.walls.velocity):
-            problems.append("moving planes are not supported")
+                continue
+            if getattr(bd, "motion", None) is not None:
+                problems.append(f"boundary {k} ({bd.name}) moves; only fixed planes are "
+                                "supported")
+            p, nv = bd.planes()
+            pts.append(np.asarray(p, float))
+            nrm.append(np.asarray(nv, float))
+            mats += [sim._material_index(bd.material, "")] * len(p)
+            owners += [k] * len(p)
+        # the planes of every boundary, packed for the kernels (object form: bd.planes())
+        self._w_point = np.ascontiguousarray(np.concatenate(pts))
+        self._w_normal = np.ascontiguousarray(np.concatenate(nrm))
+        self._w_mat = np.array(mats, np.int64)
+        self._w_owner = np.array(owners, np.int64)
+        self._w_force = np.zeros((len(mats), 3))
         laws: list[tuple[str, str]] = []
         for law in sim._contacts.values():
             if law.kernel not in laws:
@@ -123,7 +137,7 @@ class ImplicitIntegrator(Integrator):
     def _rebuild(self, sim: Any) -> None:
         """Candidate pairs and plane entries within a margin of the current positions,
         with the tangential history of those that were candidates before."""
-        b, w = sim.bodies, sim.walls
+        b = sim.bodies
         x = b.position
         dt = sim.dt
         acc = np.linalg.norm(b.force * b.invmass[:, None], axis=1)
@@ -141,10 +155,10 @@ class ImplicitIntegrator(Integrator):
         hist = np.zeros((cnt, 8))
         K.sort_and_merge(self._pi, self._pj, cnt, n, self._pkey, self._phist, key, hist)
         self._pkey, self._phist, self._np[0] = key, hist, cnt
-        nw = len(w.point)
+        nw = len(self._w_point)
         while True:
-            cw = K.candidate_walls(x, self._radius, self._margin, w.point, w.normal, self._wi,
-                                   self._ww)
+            cw = K.candidate_walls(x, self._radius, self._margin, self._w_point,
+                                   self._w_normal, self._wi, self._ww)
             if cw <= len(self._wi):
                 break
             self._wi = np.zeros(2 * cw, np.int64)
@@ -158,12 +172,13 @@ class ImplicitIntegrator(Integrator):
 
     def _forces(self, sim: Any, x: np.ndarray, v: np.ndarray, w: np.ndarray) -> tuple:
         """(force incl. gravity, torque) at (x, v, w) without touching the histories."""
-        b, wl = sim.bodies, sim.walls
+        b = sim.bodies
         f = np.zeros_like(x)
         t = np.zeros_like(x)
-        wf = np.zeros((len(wl.point), 3))
+        wf = np.zeros((len(self._w_point), 3))
         K.contact_forces(x, v, w, sim.dt, self._radius, b.mass, b.material, self._law_kind,
-                         sim._pair_model, sim._pair_params, wl.point, wl.normal, wl.material,
+                         sim._pair_model, sim._pair_params, self._w_point, self._w_normal,
+                         self._w_mat,
                          self._pi, self._pj, int(self._np[0]), self._phist, self._wi, self._ww,
                          int(self._nw[0]), self._whist, f, t, wf)
         f += b.mass[:, None] * sim.gravity
@@ -179,9 +194,20 @@ class ImplicitIntegrator(Integrator):
         f, t, wf = self._forces(sim, b.position, b.velocity, b.angular_velocity)
         b.force[:] = f
         b.torque[:] = t
-        sim.walls.force[:] = wf
+        self._w_force[:] = wf
+        self._store_loads(sim)
         sim._aux[:] = 0.0
         self._start_history(sim)
+
+    def _store_loads(self, sim: Any) -> None:
+        """Force of the particles on each boundary into the scene's boundary table (read
+        by ``sim.boundaries[k].force``); the torque is left at zero."""
+        w = sim.walls
+        if w is None or not hasattr(w, "load"):
+            return
+        w.load[:] = 0.0
+        for k in range(len(sim.boundaries)):
+            w.load[k, :3] = self._w_force[self._w_owner == k].sum(axis=0)
 
     def _start_history(self, sim: Any) -> None:
         """Scheme-specific history (Numerov: x_{-1}, a_{-1})."""
@@ -189,7 +215,7 @@ class ImplicitIntegrator(Integrator):
     def advance(self, sim: Any, n: int) -> int:
         if not self._ready:
             self.start(sim)
-        b, wl, d = sim.bodies, sim.walls, sim._diag
+        b, d = sim.bodies, sim._diag
         tol = self.tolerance * self._rmin
         log = np.zeros(n, np.int64)
         stats = np.zeros(5)
@@ -203,7 +229,8 @@ class ImplicitIntegrator(Integrator):
                 self.gs_tolerance * tol, self.gs_max_sweeps, sim.max_overlap, self.theta,
                 b.position, b.velocity, b.orientation, b.angular_velocity, b.force, b.torque,
                 sim._aux, self._radius, b.mass, self._inertia, b.material, self._law_kind,
-                sim._pair_model, sim._pair_params, wl.point, wl.normal, wl.material, wl.force,
+                sim._pair_model, sim._pair_params, self._w_point, self._w_normal, self._w_mat,
+                self._w_force,
                 self._pi, self._pj, self._np, self._pkey, self._phist, self._wi, self._ww,
                 self._nw, self._wkey, self._whist, self._xref, self._margin, self._work,
                 np.zeros(1, np.int64), log[done:], stats, d)
@@ -212,6 +239,7 @@ class ImplicitIntegrator(Integrator):
                 self._rebuild(sim)
                 continue
             break
+        self._store_loads(sim)
         self.iterations = log[:done]
         self.stats["steps"] += done
         self.stats["iterations"] += int(stats[0])
