@@ -65,12 +65,14 @@ _KIND_FUNCS = {0: "plane_distance", 1: "slab_distance", 2: "axi_distance",
                3: "torus_distance", 4: "triangle_distance", 5: "sieve_distance"}
 
 
-def _closest_lines(kinds: list[int]) -> list[str]:
-    """A ``closest`` dispatching over the boundary kinds of the scene only."""
+def _closest_lines(kinds: list[int], periodic: bool) -> list[str]:
+    """A ``closest`` dispatching over the boundary kinds of the scene only; the scene's
+    constants (meshes present, periodic axes)."""
     kinds = sorted(set(kinds)) or [0]
     names = ", ".join(_KIND_FUNCS[k] for k in kinds)
     lines = [f"from .boundary_geometry import {names}", "",
-             f"HAS_TRIANGLES = {4 in kinds}", "", "", "@inline_jit",
+             f"HAS_TRIANGLES = {4 in kinds}", f"PERIODIC = {bool(periodic)}", "", "",
+             "@inline_jit",
              "def closest(kind, p, x, y, z, r):",
              '    """Contact geometry of the boundary kinds of this scene."""']
     for n, k in enumerate(kinds):
@@ -88,7 +90,7 @@ def _closest_lines(kinds: list[int]) -> list[str]:
 
 
 def render(laws: list[tuple[str, str]], integrator_module: str,
-           kinds: list[int] | None = None) -> str:
+           kinds: list[int] | None = None, periodic: bool = False) -> str:
     """Source of the step module for these (module, function) laws, integrator and
     boundary kinds."""
     template = (Path(kernels.__file__).parent / "step.py").read_text()
@@ -96,7 +98,7 @@ def render(laws: list[tuple[str, str]], integrator_module: str,
     for k, (mod, fn) in enumerate(laws):
         lines.append(f"from {mod} import {fn} as law_{k}")
     lines.append(f"from {integrator_module} import pre_force_body, post_force_body")
-    lines += _closest_lines(kinds or [])
+    lines += _closest_lines(kinds or [], periodic)
     lines += ["", "", "@inline_jit",
               "def pair_force(model, p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, "
               "dt, hist, k):",
@@ -115,12 +117,12 @@ def render(laws: list[tuple[str, str]], integrator_module: str,
 
 
 def step_module(laws: list[tuple[str, str]], integrator_module: str,
-                kinds: list[int] | None = None) -> ModuleType:
+                kinds: list[int] | None = None, periodic: bool = False) -> ModuleType:
     """Import (generating if needed) the step module for these laws, integrator and
     boundary kinds."""
     if not laws:
         laws = [("dpm.kernels.law_linear", "linear_spring_dashpot")]
-    src = render(laws, integrator_module, kinds)
+    src = render(laws, integrator_module, kinds, periodic)
     h = hashlib.sha256(src.encode())
     for mod in sorted({m for m, _ in laws} | {integrator_module}):
         importlib.import_module(mod)

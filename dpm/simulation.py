@@ -118,6 +118,8 @@ class Simulation:
         self._contacts: dict[tuple[int, int], ImpactModel] = {}
         self.boundaries: list[Boundary] = []
         self.inlets: list[Inlet] = []
+        #: periodic box: lower corner [0:3] and period [3:6] per axis (0: not periodic)
+        self.period = np.zeros(6)
         self.outlets: list[Outlet] = []
         self.bodies = Bodies()
         self.elements = Elements()
@@ -243,6 +245,50 @@ class Simulation:
         self._prepared = False
         self._forces_valid = False
         return ids
+
+    def set_periodic(self, axis: str | int, lower: float, upper: float) -> None:
+        """Make ``axis`` ("x", "y", "z" or 0-2) periodic between ``lower`` and ``upper``
+        [m]: a body leaving through one face re-enters through the other, and contacts
+        act between nearest images. The period must be at least twice the contact search
+        cell (2 (2 r_max + skin)); checked when the run starts."""
+        axes = {"x": 0, "y": 1, "z": 2, 0: 0, 1: 1, 2: 2}
+        if axis not in axes:
+            raise ParameterError(f"sim.set_periodic(): axis={axis!r}; allowed: x, y, z")
+        if not (math.isfinite(lower) and math.isfinite(upper) and upper > lower):
+            raise ParameterError(f"sim.set_periodic(): upper={upper!r} must exceed "
+                                 f"lower={lower!r} (finite)")
+        d = axes[axis]
+        self.period[d] = float(lower)
+        self.period[3 + d] = float(upper - lower)
+        self._prepared = False
+        self._forces_valid = False
+
+    def _check_period(self) -> None:
+        need = 2.0 * (2.0 * float(self.elements.radius.max()) + self.skin)
+        for d in range(3):
+            if 0.0 < self.period[3 + d] < need:
+                raise ParameterError(
+                    f"sim.set_periodic(): the period along {'xyz'[d]} is "
+                    f"{self.period[3 + d]:.4g} m; it must be at least {need:.4g} m (twice "
+                    "the contact search range 2 r_max + skin) for nearest images to be unique")
+
+    def _wrap_periodic(self) -> None:
+        """Move bodies that left the periodic box back in by whole periods (their elements
+        and rebuild references move with them, so no rebuild is triggered)."""
+        b, e = self.bodies, self.elements
+        for d in range(3):
+            length = self.period[3 + d]
+            if length <= 0.0 or len(b) == 0:
+                continue
+            shift = np.floor((b.position[:, d] - self.period[d]) / length) * length
+            moved = shift != 0.0
+            if not np.any(moved):
+                continue
+            b.position[:, d] -= shift
+            es = shift[e.owner]
+            if not self._spheres_only:
+                e.position[:, d] -= es
+            e.reference[:, d] -= es
 
     def add_inlet(self, region: Region, material: Material, **params: Any) -> Inlet:
         """Insert particles during the run (:class:`dpm.flow.Inlet`: ``rate`` or
@@ -528,7 +574,11 @@ class Simulation:
         if pairs:
             i = np.repeat(np.arange(len(e)), np.diff(self.contacts.start))
             j = self.contacts.key[:pairs]
-            d = np.linalg.norm(e.position[i] - e.position[j], axis=1)
+            dv = e.position[i] - e.position[j]
+            per = self.period[3:]
+            dv = np.where(per > 0, dv - per * np.floor(dv / np.where(per > 0, per, 1) + 0.5),
+                          dv)
+            d = np.linalg.norm(dv, axis=1)
             ratio = (e.radius[i] + e.radius[j] - d) / np.minimum(e.radius[i], e.radius[j])
             k = int(np.argmax(ratio))
             if ratio[k] > tol:
@@ -588,7 +638,9 @@ class Simulation:
                                    float(self.elements.radius.max()) + self.skin)
         self._moving = any(bd.motion is not None for bd in self.boundaries)
         self._module = _plan.step_module(laws, self.integrator.kernel_module,
-                                         sorted(set(self.walls.kind.tolist())))
+                                         sorted(set(self.walls.kind.tolist())),
+                                         bool(np.any(self.period[3:] > 0)))
+        self._check_period()
         self._set_frames()
         e, b = self.elements, self.bodies
         # every body one sphere at its centre: the element positions are the body positions
@@ -607,6 +659,8 @@ class Simulation:
         if not self._spheres_only:
             self._module.update_element_positions(b.position, b.orientation, b.element_start,
                                                   e.offset, e.position)
+        if np.any(self.period[3:] > 0):
+            self._wrap_periodic()
         self._rebuild()
         self._check_initial_overlaps()
         self._prepared = True
@@ -648,7 +702,8 @@ class Simulation:
         """The boundary arrays the kernels take as one tuple (see kernels/step.py)."""
         w = self.walls
         return (w.kind, w.par, w.owner, w.material, w.ids, w.frame, w.frame_ref, w.extent,
-                w.load, w.grid_int, w.grid_flt, w.cell_start, w.cell_items, w.prim_cells)
+                w.load, w.grid_int, w.grid_flt, w.cell_start, w.cell_items, w.prim_cells,
+                self.period)
 
     def _set_frames(self) -> None:
         """Boundary frames at the current time."""
@@ -801,6 +856,8 @@ class Simulation:
                 break
         self.step_count += total
         self.time = self.step_count * self.dt
+        if np.any(self.period[3:] > 0):
+            self._wrap_periodic()
         self.rebuild_count += int(d[2])
         d[2] = 0
         self._update_boundary_loads()

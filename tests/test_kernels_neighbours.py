@@ -16,7 +16,7 @@ def _build(pos, rad, owner, skin, cap=10000, old=None):
     count = neighbours.build_neighbour_list(
         pos, rad, owner, skin, start, j, hist, active, np.zeros(n + 1, np.int64),
         np.zeros(cap, np.int64), np.zeros((cap, N_HISTORY)), np.zeros(cap, np.uint8),
-        np.zeros(n + 1, np.int64), np.zeros(cap, np.int64))
+        np.zeros(n + 1, np.int64), np.zeros(cap, np.int64), np.zeros(6))
     return count, start, j, hist
 
 
@@ -32,7 +32,7 @@ def test_matches_brute_force_polydisperse(seed):
     skin = 1e-3
     count, start, j, _ = _build(pos, rad, owner, skin)
     got = {(i, int(j[k])) for i in range(n) for k in range(start[i], start[i + 1])}
-    ref = set(neighbours.brute_force_pairs(pos, rad, owner, skin))
+    ref = set(neighbours.brute_force_pairs(pos, rad, owner, skin, np.zeros(6)))
     assert count == len(ref)
     assert got == ref
     assert (0, 1) not in got
@@ -46,7 +46,7 @@ def test_overflow_reports_need_and_keeps_old_list():
     pos = rng.uniform(0, 0.01, (200, 3))
     rad = np.full(200, 1e-3)
     owner = np.arange(200)
-    need = len(neighbours.brute_force_pairs(pos, rad, owner, 0.0))
+    need = len(neighbours.brute_force_pairs(pos, rad, owner, 0.0, np.zeros(6)))
     count, start, j, _ = _build(pos, rad, owner, 0.0, cap=need - 1)
     assert count == need
     assert start[-1] == 0  # nothing copied back

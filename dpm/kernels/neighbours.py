@@ -20,7 +20,7 @@ import math
 import numpy as np
 from numba import prange
 
-from .config import jit, pjit
+from .config import inline_jit, jit, pjit
 
 #: at most this many cells per element (a sparse scene gets coarser cells)
 CELLS_PER_ELEMENT = 2
@@ -46,8 +46,12 @@ def max_displacement_sq(e_pos, e_ref):
 
 
 @jit
-def bin_elements(e_pos, cell_size):
+def bin_elements(e_pos, cell_size, period):
     """Counting-sort elements into a regular grid of cells at least ``cell_size`` wide.
+
+    ``period`` (6,): lower corner and length of the periodic box per axis (length 0: that
+    axis is not periodic). Along a periodic axis the grid spans exactly the period and
+    positions are wrapped into it.
 
     Returns (lo, width, dims, cell_start, order): element order[cell_start[c]:cell_start[c+1]]
     lie in cell c = ix + dims[0] * (iy + dims[1] * iz).
@@ -65,6 +69,10 @@ def bin_elements(e_pos, cell_size):
                 lo[d] = x
             if x > hi[d]:
                 hi[d] = x
+    for d in range(3):
+        if period[3 + d] > 0.0:
+            lo[d] = period[d]
+            hi[d] = period[d] + period[3 + d]
     dims = np.ones(3, dtype=np.int64)
     for d in range(3):
         if n > 0 and hi[d] > lo[d]:
@@ -79,7 +87,7 @@ def bin_elements(e_pos, cell_size):
     for d in range(3):
         span = hi[d] - lo[d] if n > 0 else 0.0
         width[d] = span / dims[d] if span > 0 else cell_size
-        if width[d] < cell_size:
+        if width[d] < cell_size and period[3 + d] == 0.0:
             width[d] = cell_size
     ncell = dims[0] * dims[1] * dims[2]
     cell_of = np.empty(n, dtype=np.int64)
@@ -88,11 +96,7 @@ def bin_elements(e_pos, cell_size):
         c = 0
         stride = 1
         for d in range(3):
-            k = int((e_pos[i, d] - lo[d]) / width[d])
-            if k >= dims[d]:
-                k = dims[d] - 1
-            if k < 0:
-                k = 0
+            k = cell_index(e_pos[i, d], lo[d], width[d], dims[d], period[3 + d])
             c += k * stride
             stride *= dims[d]
         cell_of[i] = c
@@ -108,9 +112,42 @@ def bin_elements(e_pos, cell_size):
     return lo, width, dims, cell_start, order
 
 
+@inline_jit
+def cell_index(x, lo, width, dims, length):
+    """Cell of coordinate x along one axis (wrapped if the axis has period ``length``)."""
+    k = int(math.floor((x - lo) / width))
+    if length > 0.0:
+        k = k % dims
+    elif k >= dims:
+        k = dims - 1
+    elif k < 0:
+        k = 0
+    return k
+
+
+@inline_jit
+def cell_range(c, dims, length):
+    """(first, count) of the neighbour cells of cell c along one axis: c-1..c+1 (wrapped on
+    a periodic axis; all cells if it has fewer than 3)."""
+    if length > 0.0:
+        if dims >= 3:
+            return c - 1, 3
+        return 0, dims
+    first = max(c - 1, 0)
+    return first, min(c + 2, dims) - first
+
+
+@inline_jit
+def minimum_image(dx, length):
+    """dx of the nearest periodic image (unchanged if length is 0)."""
+    if length > 0.0:
+        return dx - length * math.floor(dx / length + 0.5)
+    return dx
+
+
 @pjit
 def _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, counts,
-            out_start, out_j, fill):
+            out_start, out_j, fill, period):
     """Pass 1 (fill=False): counts[i] = partners j > i. Pass 2: write them sorted."""
     n = e_pos.shape[0]
     for i in prange(n):
@@ -119,22 +156,28 @@ def _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, 
         zi = e_pos[i, 2]
         ri = e_radius[i] + skin
         oi = e_owner[i]
-        cx = min(max(int((xi - lo[0]) / width[0]), 0), dims[0] - 1)
-        cy = min(max(int((yi - lo[1]) / width[1]), 0), dims[1] - 1)
-        cz = min(max(int((zi - lo[2]) / width[2]), 0), dims[2] - 1)
+        cx = cell_index(xi, lo[0], width[0], dims[0], period[3])
+        cy = cell_index(yi, lo[1], width[1], dims[1], period[4])
+        cz = cell_index(zi, lo[2], width[2], dims[2], period[5])
+        fx, nx = cell_range(cx, dims[0], period[3])
+        fy, ny = cell_range(cy, dims[1], period[4])
+        fz, nz = cell_range(cz, dims[2], period[5])
         first = out_start[i] if fill else 0
         count = first
-        for gz in range(max(cz - 1, 0), min(cz + 2, dims[2])):
-            for gy in range(max(cy - 1, 0), min(cy + 2, dims[1])):
-                for gx in range(max(cx - 1, 0), min(cx + 2, dims[0])):
+        for tz in range(nz):
+            gz = (fz + tz) % dims[2]
+            for ty in range(ny):
+                gy = (fy + ty) % dims[1]
+                for tx in range(nx):
+                    gx = (fx + tx) % dims[0]
                     c = gx + dims[0] * (gy + dims[1] * gz)
                     for s in range(cell_start[c], cell_start[c + 1]):
                         j = order[s]
                         if j <= i or e_owner[j] == oi:
                             continue
-                        dx = xi - e_pos[j, 0]
-                        dy = yi - e_pos[j, 1]
-                        dz = zi - e_pos[j, 2]
+                        dx = minimum_image(xi - e_pos[j, 0], period[3])
+                        dy = minimum_image(yi - e_pos[j, 1], period[4])
+                        dz = minimum_image(zi - e_pos[j, 2], period[5])
                         cut = ri + e_radius[j]
                         if dx * dx + dy * dy + dz * dz < cut * cut:
                             if fill:  # insertion into the sorted segment of i
@@ -205,7 +248,7 @@ def build_transpose(nl_start, nl_j, t_start, t_pair):
 
 @jit
 def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist, nl_active,
-                         new_start, new_j, new_hist, new_active, t_start, t_pair):
+                         new_start, new_j, new_hist, new_active, t_start, t_pair, period):
     """Rebuild the half list, merge history and flags, copy back, build the transpose.
 
     Returns the number of pairs found. If it exceeds the capacity nothing is changed (the
@@ -217,10 +260,10 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
     for i in range(n):
         if e_radius[i] > rmax:
             rmax = e_radius[i]
-    lo, width, dims, cell_start, order = bin_elements(e_pos, 2.0 * rmax + skin)
+    lo, width, dims, cell_start, order = bin_elements(e_pos, 2.0 * rmax + skin, period)
     counts = np.zeros(n, np.int64)
     _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, counts,
-            new_start, new_j, n < 0)
+            new_start, new_j, n < 0, period)
     new_start[0] = 0
     for i in range(n):
         new_start[i + 1] = new_start[i] + counts[i]
@@ -228,7 +271,7 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
     if count > cap:
         return count
     _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, counts,
-            new_start, new_j, n >= 0)
+            new_start, new_j, n >= 0, period)
     _merge(nl_start, nl_j, nl_hist, nl_active, new_start, new_j, new_hist, new_active)
     _copy_back(count, new_start, new_j, new_hist, new_active, nl_start, nl_j, nl_hist,
                nl_active)
@@ -237,16 +280,19 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
 
 
 @jit
-def brute_force_pairs(e_pos, e_radius, e_owner, skin):
-    """All pairs i < j within r_i + r_j + skin, by the O(n^2) loop (reference for tests)."""
+def brute_force_pairs(e_pos, e_radius, e_owner, skin, period):
+    """All pairs i < j within r_i + r_j + skin (nearest periodic image), by the O(n^2)
+    loop (reference for tests)."""
     n = e_pos.shape[0]
     out = []
     for i in range(n):
         for j in range(i + 1, n):
             if e_owner[i] == e_owner[j]:
                 continue
-            d = math.sqrt((e_pos[i, 0] - e_pos[j, 0]) ** 2 + (e_pos[i, 1] - e_pos[j, 1]) ** 2
-                          + (e_pos[i, 2] - e_pos[j, 2]) ** 2)
+            dx = minimum_image(e_pos[i, 0] - e_pos[j, 0], period[3])
+            dy = minimum_image(e_pos[i, 1] - e_pos[j, 1], period[4])
+            dz = minimum_image(e_pos[i, 2] - e_pos[j, 2], period[5])
+            d = math.sqrt(dx * dx + dy * dy + dz * dz)
             if d < e_radius[i] + e_radius[j] + skin:
                 out.append((i, j))
     return out

@@ -38,7 +38,7 @@ from .boundary_geometry import TRIANGLE, in_range, touching
 from .boundary_search import boundary_motion_since_rebuild, to_local, to_world
 from .mesh_contact import resolve_triangle_contacts
 from .neighbours import _copy_back as copy_back, _merge as merge_history
-from .neighbours import build_neighbour_list
+from .neighbours import build_neighbour_list, minimum_image
 from .rigid_rotation import rotate
 from .rolling import rolling_torque
 
@@ -49,6 +49,7 @@ from .integrate_velocity_verlet import pre_force_body, post_force_body
 from .boundary_geometry import plane_distance
 
 HAS_TRIANGLES = False
+PERIODIC = False
 
 
 @inline_jit
@@ -135,6 +136,7 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
     ne = e_pos.shape[0]
     nh = nl_hist.shape[1]
     w_kind, w_par, w_owner, w_mat, w_ids, f_cur = bnd[0], bnd[1], bnd[2], bnd[3], bnd[4], bnd[5]
+    period = bnd[14]
     for i in prange(ne):
         xi = e_pos[i, 0]
         yi = e_pos[i, 1]
@@ -149,6 +151,10 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
             dx = xi - e_pos[j, 0]
             dy = yi - e_pos[j, 1]
             dz = zi - e_pos[j, 2]
+            if PERIODIC:  # nearest image of j (a constant of the scene: no cost otherwise)
+                dx = minimum_image(dx, period[3])
+                dy = minimum_image(dy, period[4])
+                dz = minimum_image(dz, period[5])
             rj = e_radius[j]
             rs = ri + rj
             d2 = dx * dx + dy * dy + dz * dz
@@ -184,6 +190,10 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
             ajx = cx - b_pos[bj, 0]
             ajy = cy - b_pos[bj, 1]
             ajz = cz - b_pos[bj, 2]
+            if PERIODIC:  # lever arm to the image of j's body
+                ajx -= xi - dx - e_pos[j, 0]
+                ajy -= yi - dy - e_pos[j, 1]
+                ajz -= zi - dz - e_pos[j, 2]
             # relative velocity of i with respect to j at the contact point
             vx = (b_vel[bi, 0] + b_angvel[bi, 1] * aiz - b_angvel[bi, 2] * aiy
                   - b_vel[bj, 0] - b_angvel[bj, 1] * ajz + b_angvel[bj, 2] * ajy)
@@ -462,7 +472,7 @@ def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_a
     """Rebuild both lists; on overflow set the status and the needed size, change nothing."""
     need = build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist,
                                 nl_active, new_start, new_j, new_hist, new_active, t_start,
-                                t_pair)
+                                t_pair, bnd[14])
     if need > new_j.shape[0]:
         diag[0] = STATUS_OVERFLOW
         diag[3] = need
