@@ -24,6 +24,23 @@ Layout (every table mirrors a call; keys are the call's keyword arguments)::
     lower = [0, 0, 0]
     upper = [0.042, 0.042, 0.0609]
     open = ["+z"]
+    # any boundary may move: motion = { type = "rotation", rpm = 30, axis = [1, 0, 0] }
+    # (types: translation, rotation, oscillation, triangular_oscillation, tumbling; a list
+    # of such tables composes them in order); a mesh's file is relative to the scene file
+
+    [[periodic]]                 # sim.set_periodic("x", 0.0, 0.1)
+    axis = "x"
+    lower = 0.0
+    upper = 0.1
+
+    [[inlets]]                   # sim.add_inlet(dpm.BoxRegion(...), glass, ...)
+    material = "glass"
+    region = { box = { lower = [0, 0, 0.1], upper = [0.04, 0.04, 0.12] } }
+    rate = 1000                  # or mass_rate (kg/s)
+    radius = [1e-3, 1.2e-3]      # a pair: uniform between
+
+    [[outlets]]                  # sim.add_outlet(dpm.BoxRegion(...), remove="inside")
+    region = { cylinder = { start = [0, 0, -1], axis = [0, 0, 1], length = 0.9, radius = 1 } }
 
     [[particles]]                # sim.add_particles("sphere", material=glass, ...)
     shape = "sphere"
@@ -54,7 +71,33 @@ from ..material import Material
 from ..scene_tools import lattice
 from ..simulation import Simulation
 
-_TOP = {"simulation", "materials", "contacts", "boundaries", "particles", "output", "run"}
+_TOP = {"simulation", "materials", "contacts", "boundaries", "particles", "output", "run",
+        "periodic", "inlets", "outlets"}
+_MOTIONS = {"translation": "Translation", "rotation": "Rotation", "oscillation": "Oscillation",
+            "triangular_oscillation": "TriangularOscillation", "tumbling": "Tumbling"}
+
+
+def _motion(where: str, spec: Any) -> Any:
+    from .. import motion as mo
+
+    if isinstance(spec, list):
+        return mo.Compose(*[_motion(f"{where}[{k}]", s) for k, s in enumerate(spec)])
+    if not isinstance(spec, dict) or spec.get("type") not in _MOTIONS:
+        raise ParameterError(f"{where}: motion={spec!r} needs type = one of "
+                             f"{', '.join(_MOTIONS)}")
+    kw = {k: (tuple(v) if isinstance(v, list) else v) for k, v in spec.items() if k != "type"}
+    return getattr(mo, _MOTIONS[spec["type"]])(**kw)
+
+
+def _region(where: str, spec: Any) -> Any:
+    from ..regions import BoxRegion, CylinderRegion
+
+    kinds = {"box": BoxRegion, "cylinder": CylinderRegion}
+    if not isinstance(spec, dict) or len(spec) != 1 or next(iter(spec)) not in kinds:
+        raise ParameterError(f"{where}: region={spec!r} must be {{ box = {{...}} }} or "
+                             "{ cylinder = {...} }")
+    kind, kw = next(iter(spec.items()))
+    return kinds[kind](**kw)
 
 
 def load_scene(path: str | Path) -> tuple[Simulation, dict[str, Any]]:
@@ -90,7 +133,24 @@ def load_scene(path: str | Path) -> tuple[Simulation, dict[str, Any]]:
         b = dict(b)
         kind = b.pop("kind", None)
         m = mat(f"boundaries[{k}]", b.pop("material", None))
+        if "motion" in b:
+            b["motion"] = _motion(f"{path}: boundaries[{k}]", b["motion"])
+        if kind == "mesh" and "file" in b:
+            b["file"] = str(path.parent / b["file"])
         sim.add_boundary(kind, material=m, **b)
+    for per in doc.get("periodic", []):
+        sim.set_periodic(**per)
+    for k, spec in enumerate(doc.get("inlets", [])):
+        spec = dict(spec)
+        m = mat(f"inlets[{k}]", spec.pop("material", None))
+        region = _region(f"{path}: inlets[{k}]", spec.pop("region", None))
+        spec = {key: (tuple(v) if isinstance(v, list) and key != "shapes" else v)
+                for key, v in spec.items()}
+        sim.add_inlet(region, m, **spec)
+    for k, spec in enumerate(doc.get("outlets", [])):
+        spec = dict(spec)
+        region = _region(f"{path}: outlets[{k}]", spec.pop("region", None))
+        sim.add_outlet(region, **spec)
     for k, p in enumerate(doc.get("particles", [])):
         p = dict(p)
         shape = p.pop("shape", "sphere")
