@@ -871,6 +871,8 @@ class Simulation:
 
     def _check_speeds(self) -> None:
         b = self.bodies
+        if len(b) == 0:
+            return
         v = np.sqrt(np.einsum("ij,ij->i", b.velocity, b.velocity))
         k = int(np.argmax(v))
         if not np.isfinite(v[k]):
