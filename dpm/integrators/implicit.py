@@ -80,6 +80,10 @@ class ImplicitIntegrator(Integrator):
                             "supported; clustered bodies need an explicit integrator")
         if np.any(b.invmass == 0.0):
             problems.append("bodies of infinite mass are not supported")
+        if getattr(sim, "inlets", None) or getattr(sim, "outlets", None):
+            problems.append("inlets and outlets are not supported (the body count is fixed)")
+        if np.any(getattr(sim, "period", np.zeros(6))[3:] > 0):
+            problems.append("periodic faces are not supported")
         pts, nrm, mats, owners = [np.zeros((0, 3))], [np.zeros((0, 3))], [], []
         for k, bd in enumerate(sim.boundaries):
             if bd.name not in PLANE_KINDS:
