@@ -107,6 +107,11 @@ class Boundary:
         v_pivot = fr[12:15] + np.cross(fr[15:18], self.torque_point - fr[0:3])
         return -float(self.force @ v_pivot + self.torque @ fr[15:18])
 
+    def volume(self) -> float:
+        """Volume of the boundary's material [m3] (0 for infinitely thin or unbounded
+        boundaries). Boundaries move by prescribed motions, so they need no inertia."""
+        return 0.0
+
     def primitives(self) -> Primitives:
         """The contact geometry in the boundary's frame (default: :meth:`planes`)."""
         pts, nrm = self.planes()

@@ -73,6 +73,10 @@ class Bend(Boundary):
     def end_direction(self) -> np.ndarray:
         return self.direction(self.angle)
 
+    def volume(self) -> float:
+        """Volume of the pipe wall [m3] (Pappus): 2 pi rp thickness x R angle, thin wall."""
+        return 2.0 * math.pi * self.rp * 2.0 * self.h * self.R * self.angle
+
     def primitives(self) -> Primitives:
         pad = self.R + self.rp + self.h
         lo, hi = self.center - pad, self.center + pad

@@ -76,6 +76,14 @@ class Mesh(Boundary):
         self.faces = np.asarray(tm.faces, np.int64)
         self.h = 0.5 * float(p["thickness"])
 
+    def volume(self) -> float:
+        """Enclosed volume [m3] of a watertight mesh; else the surface area times the
+        thickness."""
+        if self.trimesh.is_watertight:
+            return float(abs(self.trimesh.volume)) * float(self.params["scale"]) ** 3
+        area = float(self.trimesh.area) * float(self.params["scale"]) ** 2
+        return area * 2.0 * self.h
+
     def feature_flags(self) -> np.ndarray:
         """Per face: bits 0-2 edge k active (v_k v_k+1), bits 3-5 vertex k active."""
         return feature_flags(self.trimesh, self.faces, len(self.vertices))

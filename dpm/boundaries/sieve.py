@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..errors import ParameterError
@@ -64,6 +66,16 @@ class Sieve(Wall):
         self.shape = p["shape"]
         self.model = p["clearance_model"]
         self.zeta = float(p["zeta"])
+
+    def open_area_fraction(self) -> float:
+        """Fraction of the plate area that is holes: hole^2 / pitch^2 (square) or
+        pi hole^2 / (4 pitch^2) (round)."""
+        f = self.hole**2 / self.pitch**2
+        return f * math.pi / 4.0 if self.shape == "round" else f
+
+    def volume(self) -> float:
+        """Volume of the plate [m3]: 4 a b thickness (1 - open area fraction)."""
+        return 4.0 * self.a * self.b * 2.0 * self.h * (1.0 - self.open_area_fraction())
 
     def reduced_half_width(self, radius: float | np.ndarray) -> np.ndarray:
         """Half width of the hole a sphere of ``radius`` passes through (its centre must

@@ -73,6 +73,17 @@ class Tube(Boundary):
         r = self.r0 + (self.r1 - self.r0) * z / self.length
         return (z > 0) & (z < self.length) & (rho < r)
 
+    def volume(self) -> float:
+        """Volume of the wall [m3]: the frustum's lateral area pi (r0 + r1) s (s the slant
+        length) times the thickness, plus pi r^2 thickness per cap (thin-wall formula)."""
+        s = math.hypot(self.length, self.r1 - self.r0)
+        v = math.pi * (self.r0 + self.r1) * s * 2.0 * self.h
+        if self.caps in ("start", "both"):
+            v += math.pi * self.r0**2 * 2.0 * self.h
+        if self.caps in ("end", "both"):
+            v += math.pi * self.r1**2 * 2.0 * self.h
+        return v
+
     def primitives(self) -> Primitives:
         o, a, h, L = self.start, self.axis, self.h, self.length
         rmax = max(self.r0, self.r1) + h

@@ -54,6 +54,10 @@ class Wall(Boundary):
                          + sh * self.h * self.normal
                          for sa, sb, sh in itertools.product((-1, 1), repeat=3)])
 
+    def volume(self) -> float:
+        """Volume of the plate [m3]: 4 a b thickness."""
+        return 4.0 * self.a * self.b * 2.0 * self.h
+
     def primitives(self) -> Primitives:
         row = [*self.center, *self.u, *self.v, self.a, self.b, self.h]
         return Primitives.build([(SLAB, row, box_of_points(self.corners(), 0.0))])
