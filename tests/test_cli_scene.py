@@ -84,3 +84,68 @@ def test_example_scene_file_runs(tmp_path, monkeypatch):
     assert main(["run", str(EXAMPLES / "box_settle.toml"), "--steps", "200",
                  "--no-progress"]) == 0
     assert dpm.load(tmp_path / "box_settle_toml.h5").n_frames == 1
+
+
+FLOW_SCENE = """
+[simulation]
+dt = 1e-5
+gravity = [0, 0, -9.81]
+dt_check = "off"
+
+[materials.steel]
+density = 7800
+young = 2e8
+poisson = 0.3
+
+[[contacts]]
+materials = ["steel", "steel"]
+model = "hertz_mindlin"
+restitution = 0.5
+friction = 0.5
+
+[[boundaries]]
+kind = "tube"
+material = "steel"
+start = [0, 0, 0]
+axis = [0, 1, 0]
+length = 0.02
+radius = 0.03
+caps = "both"
+motion = [{ type = "rotation", rpm = 30, axis = [0, 1, 0] },
+          { type = "oscillation", amplitude = [0, 0, 1e-4], frequency = 5 }]
+
+[[periodic]]
+axis = "x"
+lower = -0.5
+upper = 0.5
+
+[[inlets]]
+material = "steel"
+region = { box = { lower = [-0.01, 0.002, -0.01], upper = [0.01, 0.018, 0.01] } }
+rate = 2000
+radius = [1e-3, 1.5e-3]
+every = 2e-3
+stop = 0.01
+
+[[outlets]]
+region = { cylinder = { start = [0, -1, 0], axis = [0, 1, 0], length = 2, radius = 0.005 } }
+remove = "outside"
+"""
+
+
+def test_scene_with_motion_periodic_inlet_outlet(tmp_path):
+    """The TOML tables of moving boundaries, periodic axes, inlets and outlets build the
+    same objects the API would."""
+    path = tmp_path / "flow.toml"
+    path.write_text(FLOW_SCENE)
+    sim, run = load_scene(path)
+    drum = sim.boundaries[0]
+    assert isinstance(drum.motion, dpm.Compose)
+    assert drum.motion.motions[0].omega == pytest.approx(np.pi)
+    assert sim.period[3] == pytest.approx(1.0)
+    assert len(sim.inlets) == 1 and len(sim.outlets) == 1
+    sim.run(until=0.01, progress=False)
+    inlet, outlet = sim.inlets[0], sim.outlets[0]
+    assert inlet.inserted == 20
+    assert inlet.inserted == outlet.count + len(sim.bodies)
+    assert np.all(np.hypot(sim.bodies.position[:, 0], sim.bodies.position[:, 2]) < 0.03)
