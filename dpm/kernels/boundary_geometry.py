@@ -40,8 +40,13 @@ SIEVE (5)     screen plate of a hole-clearance model: centre c [0:3], axes u [3:
               Alkhaldi 2007, sec. 4.3.3, eqs. 4.20-4.24: a sphere smaller than the hole
               whose centre lies over the reduced hole (half width wh/2 - b, b = zeta
               (wh/2 - r) for model 1, b = zeta wh/2 for model 2) falls through; any other
-              sphere meets the plate (faces at |w| = h, rounded outline). The exact sieve
-              is a triangle mesh (:class:`dpm.boundaries.sieve.Sieve`).
+              sphere meets the plate (faces at |w| = h, rounded outline). Extension for
+              moving screens: a sphere passing a hole (centre over the reduced hole, or over
+              the hole and already within 3/4 of its radius of the face) meets the rim of
+              the real hole (in-plane gap to the rim combined with the depth), so one that
+              drifts while passing is guided by the rim instead of being thrown back through
+              the plane; a rim it does not reach exerts nothing, as in the thesis. The
+              exact sieve is a triangle mesh (:class:`dpm.boundaries.sieve.Sieve`).
 """
 
 import math
@@ -322,11 +327,39 @@ def sieve_distance(p, x, y, z, r):
         clear = p[16] * (half - r) if model == 1 else p[16] * half
         reduced = half - clear
         if shape == 1:
-            inside = hs * hs + ht * ht < reduced * reduced
+            rho = math.sqrt(hs * hs + ht * ht)
+            inside = rho < reduced
+            in_hole = rho < half
+            g = half - rho  # in-plane gap to the rim, towards the hole's centre:
+            if rho > 0.0:
+                gs = -hs / rho
+                gt = -ht / rho
+            else:
+                gs = 1.0
+                gt = 0.0
         else:
             inside = abs(hs) < reduced and abs(ht) < reduced
-        if inside:
-            return 1e30, sg * wx, sg * wy, sg * wz
+            in_hole = abs(hs) < half and abs(ht) < half
+            g = half - max(abs(hs), abs(ht))
+            if abs(hs) >= abs(ht):
+                gs = -1.0 if hs >= 0.0 else 1.0
+                gt = 0.0
+            else:
+                gs = 0.0
+                gt = -1.0 if ht >= 0.0 else 1.0
+        we = max(abs(w) - h, 0.0)
+        if in_hole and (inside or we < 0.75 * r):
+            # passing, or already inside the hole: the rim of the real hole
+            d = math.sqrt(g * g + we * we)
+            if d > 0.0:
+                cs = g / d
+                cw = we / d
+            else:
+                cs = 1.0
+                cw = 0.0
+            return (d, cs * (gs * ux + gt * vx) + cw * sg * wx,
+                    cs * (gs * uy + gt * vy) + cw * sg * wy,
+                    cs * (gs * uz + gt * vz) + cw * sg * wz)
     return abs(w) - h, sg * wx, sg * wy, sg * wz
 
 
