@@ -865,9 +865,34 @@ class Simulation:
             self._fail("a position became NaN")
         if d[0] == STATUS_OVERLAP:
             self._fail(f"an overlap reached {d[4]:.3g} of the radius (max_overlap="
-                       f"{self.max_overlap:g})")
+                       f"{self.max_overlap:g}){self._where(int(d[5]))}")
         self._check_speeds()
         return total
+
+    def _where(self, el: int) -> str:
+        """Which body element ``el`` belongs to, where it is and what it touches."""
+        e, b = self.elements, self.bodies
+        if not 0 <= el < len(e):
+            return ""
+        k = int(e.owner[el])
+        touching = []
+        wc, c = self.wall_contacts, self.contacts
+        for q in range(int(wc.start[el]), int(wc.start[el + 1])):
+            if wc.active[q]:
+                bi = int(self.walls.owner[wc.key[q]])
+                touching.append(f"boundary {bi} ({self.boundaries[bi].name})")
+        for kk in range(int(c.start[el]), int(c.start[el + 1])):
+            if c.active[kk]:
+                touching.append(f"particle {b.id[e.owner[c.key[kk]]]}")
+        for t in range(int(c.t_start[el]), int(c.t_start[el + 1])):
+            kk = int(c.t_pair[t])
+            if c.active[kk]:
+                i = int(np.searchsorted(c.start, kk, side="right") - 1)
+                touching.append(f"particle {b.id[e.owner[i]]}")
+        p = b.position[k]
+        v = float(np.linalg.norm(b.velocity[k]))
+        return (f" at particle {b.id[k]} (position ({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m, "
+                f"speed {v:.3g} m/s, touching {', '.join(touching[:6]) or 'nothing now'})")
 
     def _check_speeds(self) -> None:
         b = self.bodies
