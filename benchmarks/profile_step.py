@@ -42,27 +42,28 @@ def main() -> None:
     sim.add_particles("sphere", material=g, radius=D / 2, positions=pos, velocities=vel)
     sim.run(steps=50, progress=False)
     m, args, dt = sim._module, sim._args(), sim.dt
-    b, e, c, wc, w = sim.bodies, sim.elements, sim.contacts, sim.wall_contacts, sim.walls
+    b, e, c, wc = sim.bodies, sim.elements, sim.contacts, sim.wall_contacts
     n = len(b)
-    step = timed(lambda: m.run_steps(100, dt, *args), 5) / 100
+    table = sim._frame_table(100, sim.step_count)
+    step = timed(lambda: m.run_steps(100, dt, *args, table), 5) / 100
     begin = timed(lambda: m.begin_step(
         0.0, False, b.position, b.velocity, b.orientation, b.angular_velocity, b.force,
-        b.torque, b.invmass, b.invinertia, sim._vf, sim._wf, b.element_start, e.offset,
-        e.position, e.reference, sim._e_worst), 200)
+        b.torque, b.invmass, b.invinertia, sim._vf, sim._wf, sim._aux, b.element_start,
+        e.offset, e.position, e.reference, sim._e_worst), 200)
     contact = timed(lambda: m.contact_pass(
         0.0, b.position, sim._vf, sim._wf, b.mass, b.invmass, e.owner, e.radius, e.material,
         e.position, c.start, c.key, c.history, c.active, c.force, wc.start, wc.key,
-        wc.history, wc.active, wc.force, w.point, w.normal, w.velocity, w.material,
-        sim._pair_model, sim._pair_params, sim._e_worst, sim._e_count), 200)
+        wc.history, wc.active, wc.force, wc.tag, sim._bnd(), sim._pair_model,
+        sim._pair_params, sim._e_worst, sim._e_count), 200)
     summed = timed(lambda: m.sum_pass(
         0.0, False, sim.gravity, b.position, b.velocity, b.orientation, b.angular_velocity,
-        b.force, b.torque, b.mass, b.invmass, b.invinertia, b.element_start, c.start,
+        b.force, b.torque, b.mass, b.invmass, b.invinertia, sim._aux, b.element_start, c.start,
         c.active, c.force, c.t_start, c.t_pair, wc.start, wc.active, wc.force), 200)
     rebuild = timed(lambda: m.rebuild(
         sim.skin, e.owner, e.radius, e.position, e.reference, c.start, c.key, c.history,
         c.active, c.new_start, c.new_key, c.new_history, c.new_active, c.t_start, c.t_pair,
         wc.start, wc.key, wc.history, wc.active, wc.new_start, wc.new_key, wc.new_history,
-        wc.new_active, w.point, w.normal, sim._diag), 10)
+        wc.new_active, sim._bnd(), sim._diag), 10)
     print(f"{a.case} box, {n} spheres, {c.count} listed pairs, {int(sim._diag[6])} touching; "
           f"us per step: step {step:.0f} | begin {begin:.0f} ({begin / n * 1e3:.0f} ns per "
           f"body) | contact {contact:.0f} | sum {summed:.0f} | one rebuild {rebuild:.0f}")

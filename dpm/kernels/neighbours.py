@@ -146,16 +146,36 @@ def minimum_image(dx, length):
 
 
 @pjit
-def _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, counts,
-            out_start, out_j, fill, period):
-    """Pass 1 (fill=False): counts[i] = partners j > i. Pass 2: write them sorted."""
+def _sorted_copies(e_pos, e_radius, e_owner, order):
+    """Positions and radii (n, 4) and owners of the elements in cell order, so that the
+    search reads each cell's candidates from contiguous memory."""
     n = e_pos.shape[0]
-    for i in prange(n):
-        xi = e_pos[i, 0]
-        yi = e_pos[i, 1]
-        zi = e_pos[i, 2]
-        ri = e_radius[i] + skin
-        oi = e_owner[i]
+    sp = np.empty((n, 4))
+    so = np.empty(n, np.int64)
+    for s in prange(n):
+        j = order[s]
+        sp[s, 0] = e_pos[j, 0]
+        sp[s, 1] = e_pos[j, 1]
+        sp[s, 2] = e_pos[j, 2]
+        sp[s, 3] = e_radius[j]
+        so[s] = e_owner[j]
+    return sp, so
+
+
+@pjit
+def _search(sp, so, skin, lo, width, dims, cell_start, order, counts, out_start, out_end,
+            out_j, fill, period):
+    """counts[i] = partners j > i of element i (within r_i + r_j + skin, nearest image).
+    With ``fill`` they are also written, sorted, into out_j[out_start[i]:out_end[i]] (as
+    many as fit). Elements are visited in cell order (``sp``, ``so``: cell-ordered copies)."""
+    n = sp.shape[0]
+    for si in prange(n):
+        i = order[si]
+        xi = sp[si, 0]
+        yi = sp[si, 1]
+        zi = sp[si, 2]
+        ri = sp[si, 3] + skin
+        oi = so[si]
         cx = cell_index(xi, lo[0], width[0], dims[0], period[3])
         cy = cell_index(yi, lo[1], width[1], dims[1], period[4])
         cz = cell_index(zi, lo[2], width[2], dims[2], period[5])
@@ -163,7 +183,8 @@ def _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, 
         fy, ny = cell_range(cy, dims[1], period[4])
         fz, nz = cell_range(cz, dims[2], period[5])
         first = out_start[i] if fill else 0
-        count = first
+        room = out_end[i] - first if fill else 0
+        count = 0
         for tz in range(nz):
             gz = (fz + tz) % dims[2]
             for ty in range(ny):
@@ -173,22 +194,21 @@ def _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, 
                     c = gx + dims[0] * (gy + dims[1] * gz)
                     for s in range(cell_start[c], cell_start[c + 1]):
                         j = order[s]
-                        if j <= i or e_owner[j] == oi:
+                        if j <= i:
                             continue
-                        dx = minimum_image(xi - e_pos[j, 0], period[3])
-                        dy = minimum_image(yi - e_pos[j, 1], period[4])
-                        dz = minimum_image(zi - e_pos[j, 2], period[5])
-                        cut = ri + e_radius[j]
-                        if dx * dx + dy * dy + dz * dz < cut * cut:
-                            if fill:  # insertion into the sorted segment of i
-                                k = count
+                        dx = minimum_image(xi - sp[s, 0], period[3])
+                        dy = minimum_image(yi - sp[s, 1], period[4])
+                        dz = minimum_image(zi - sp[s, 2], period[5])
+                        cut = ri + sp[s, 3]
+                        if dx * dx + dy * dy + dz * dz < cut * cut and so[s] != oi:
+                            if count < room:  # insertion into the sorted segment of i
+                                k = first + count
                                 while k > first and out_j[k - 1] > j:
                                     out_j[k] = out_j[k - 1]
                                     k -= 1
                                 out_j[k] = j
                             count += 1
-        if not fill:
-            counts[i] = count
+        counts[i] = count
 
 
 @pjit
@@ -246,10 +266,20 @@ def build_transpose(nl_start, nl_j, t_start, t_pair):
         fill[j] += 1
 
 
+#: spare slots per element when the new list is written in one pass into slots sized by
+#: the previous list (see build_neighbour_list)
+SLOT_SLACK = 4
+
+
 @jit
 def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist, nl_active,
                          new_start, new_j, new_hist, new_active, t_start, t_pair, period):
     """Rebuild the half list, merge history and flags, copy back, build the transpose.
+
+    One search pass writes each element's partners into a transient slot sized by its count
+    in the previous list plus ``SLOT_SLACK`` (lists change little between rebuilds); the
+    slots are then copied into the exact rows. If any element outgrew its slot, the rows are
+    sized by that pass's counts and a second pass fills them.
 
     Returns the number of pairs found. If it exceeds the capacity nothing is changed (the
     old list and its history are intact): the caller grows the buffers and calls again.
@@ -261,17 +291,39 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
         if e_radius[i] > rmax:
             rmax = e_radius[i]
     lo, width, dims, cell_start, order = bin_elements(e_pos, 2.0 * rmax + skin, period)
+    sp, so = _sorted_copies(e_pos, e_radius, e_owner, order)
     counts = np.zeros(n, np.int64)
-    _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, counts,
-            new_start, new_j, n < 0, period)
-    new_start[0] = 0
+    slot_start = np.empty(n + 1, np.int64)
+    slot_start[0] = 0
     for i in range(n):
-        new_start[i + 1] = new_start[i] + counts[i]
+        slot_start[i + 1] = slot_start[i] + (nl_start[i + 1] - nl_start[i]) + SLOT_SLACK
+    slots = np.empty(slot_start[n], np.int64)  # transient: keys only
+    _search(sp, so, skin, lo, width, dims, cell_start, order, counts, slot_start,
+            slot_start[1:], slots, n >= 0, period)
+    fits = True
+    for i in range(n):
+        if counts[i] > slot_start[i + 1] - slot_start[i]:
+            fits = False
+            break
+    new_start[0] = 0
+    if fits:
+        for i in range(n):
+            new_start[i + 1] = new_start[i] + counts[i]
+        if new_start[n] > cap:
+            return new_start[n]
+        for i in range(n):
+            s0 = slot_start[i]
+            d0 = new_start[i]
+            for k in range(counts[i]):
+                new_j[d0 + k] = slots[s0 + k]
+    else:  # some element outgrew its slot: size the rows exactly, then fill them
+        for i in range(n):
+            new_start[i + 1] = new_start[i] + counts[i]
+        if new_start[n] > cap:
+            return new_start[n]
+        _search(sp, so, skin, lo, width, dims, cell_start, order, counts, new_start,
+                new_start[1:], new_j, n >= 0, period)
     count = new_start[n]
-    if count > cap:
-        return count
-    _search(e_pos, e_radius, e_owner, skin, lo, width, dims, cell_start, order, counts,
-            new_start, new_j, n >= 0, period)
     _merge(nl_start, nl_j, nl_hist, nl_active, new_start, new_j, new_hist, new_active)
     _copy_back(count, new_start, new_j, new_hist, new_active, nl_start, nl_j, nl_hist,
                nl_active)
