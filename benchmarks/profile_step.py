@@ -58,7 +58,8 @@ def main() -> None:
     summed = timed(lambda: m.sum_pass(
         0.0, False, sim.gravity, b.position, b.velocity, b.orientation, b.angular_velocity,
         b.force, b.torque, b.mass, b.invmass, b.invinertia, sim._aux, b.element_start, c.start,
-        c.active, c.force, c.t_start, c.t_pair, wc.start, wc.active, wc.force), 200)
+        c.active, c.force, c.t_start, c.t_pair, wc.start, wc.active, wc.force,
+        sim._e_count), 200)
     rebuild = timed(lambda: m.rebuild(
         sim.skin, e.owner, e.radius, e.position, e.reference, c.start, c.key, c.history,
         c.active, c.new_start, c.new_key, c.new_history, c.new_active, c.t_start, c.t_pair,

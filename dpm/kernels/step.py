@@ -329,7 +329,7 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
 @pjit
 def sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass,
              b_invmass, b_invinertia, b_aux, b_estart, nl_start, nl_active, nl_f, t_start, t_pair,
-             wl_start, wl_active, wl_f):
+             wl_start, wl_active, wl_f, e_count):
     """Pass b: gravity plus the stored contact rows of each body's elements in a fixed
     order; then (if ``integrate``) step 5, the integrator's post-force part, for that body."""
     for b in prange(b_force.shape[0]):
@@ -341,7 +341,10 @@ def sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_
         ty = 0.0
         tz = 0.0
         for e in range(b_estart[b], b_estart[b + 1]):
-            for kk in range(nl_start[e], nl_start[e + 1]):
+            # e_count[e]: touching contacts in e's own rows and boundary rows (contact
+            # pass); none: nothing to add there (the sums are unchanged by skipping)
+            own = e_count[e] > 0
+            for kk in range(nl_start[e], nl_start[e + 1] if own else nl_start[e]):
                 if nl_active[kk]:
                     fx += nl_f[kk, 0]
                     fy += nl_f[kk, 1]
@@ -358,7 +361,7 @@ def sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_
                     tx += nl_f[kk, 6]
                     ty += nl_f[kk, 7]
                     tz += nl_f[kk, 8]
-            for q in range(wl_start[e], wl_start[e + 1]):
+            for q in range(wl_start[e], wl_start[e + 1] if own else wl_start[e]):
                 if wl_active[q]:
                     fx += wl_f[q, 0]
                     fy += wl_f[q, 1]
@@ -396,7 +399,7 @@ def compute_forces(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_for
                  wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst, e_count)
     sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass,
              b_invmass, b_invinertia, b_aux, b_estart, nl_start, nl_active, nl_f, t_start, t_pair,
-             wl_start, wl_active, wl_f)
+             wl_start, wl_active, wl_f, e_count)
     w_owner = bnd[2]
     f_load = bnd[8]
     for b in range(f_load.shape[0]):
