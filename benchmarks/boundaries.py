@@ -1,0 +1,213 @@
+"""Cost of element-boundary contacts: per kind, and for meshes against the triangle count.
+
+1. Per kind: the contact geometry of one element-primitive check (``closest_any`` of
+   :mod:`dpm.kernels.boundary_geometry`, the function every candidate entry costs in the
+   contact pass and the search) timed directly in a numba loop over 1e6 random sphere
+   centres near a primitive of each kind. The step itself compiles a ``closest`` of the
+   scene's kinds only, which dispatches the same inlined functions.
+2. Meshes: flat floors of 2 to ~2e5 triangles (cells of 4 mm split in two, the floor grows
+   with the count) under up to 2000 spheres (r = 2 mm) resting on it (no gravity, touching).
+   We time (a) the candidate search (counting pass of the grid search) per sphere and (b) the
+   step (contact pass with the mesh edge rules, no rebuild) per sphere. With triangles of
+   bounded size the grid makes both independent of the triangle count; the table also
+   reports the preparation (packing the triangles, feature flags, grid) per triangle.
+
+Run: ``python benchmarks/boundaries.py`` (writes benchmarks/results/boundaries.json and
+.png; ``--quick`` uses fewer sizes). LIGGGHTS is not compared (see docs/boundaries.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+
+import dpm
+from dpm.kernels.boundary_geometry import AXI, PLANE, SIEVE, SLAB, TORUS, TRIANGLE, closest_any
+
+OUT = Path(__file__).parent / "results"
+R = 2e-3
+FAR = 10.0
+
+
+@numba.njit(cache=False)
+def _loop(kind, par, pts, r):
+    acc = 0.0
+    for i in range(pts.shape[0]):
+        acc += closest_any(kind, par, pts[i, 0], pts[i, 1], pts[i, 2], r)[0]
+    return acc
+
+
+def per_kind(n: int = 1_000_000, repeats: int = 5) -> dict:
+    rng = np.random.default_rng(0)
+    par = {k: np.zeros(20) for k in (PLANE, SLAB, AXI, TORUS, TRIANGLE, SIEVE)}
+    par[PLANE][3:6] = (0, 0, 1)
+    par[SLAB][3:12] = (1, 0, 0, 0, 1, 0, 0.01, 0.01, 0.001)
+    par[AXI][3:11] = (0, 0, 1, 0.01, 0.0, 0.01, 0.05, 0.0)
+    par[TORUS][3:13] = (0, 0, 1, 1, 0, 0, 0.05, 0.01, 1.5, 0.0)
+    par[TRIANGLE][0:13] = (-0.01, -0.01, 0, 0.01, -0.01, 0, 0, 0.01, 0, 0, 0, 0, 1)
+    par[SIEVE][3:17] = (1, 0, 0, 0, 1, 0, 0.03, 0.03, 0.0, 4e-3, 6e-3, 0, 2, 0.6)
+    names = {PLANE: "plane", SLAB: "wall (slab)", AXI: "tube (axi)", TORUS: "bend (torus)",
+             TRIANGLE: "mesh triangle", SIEVE: "sieve (clearance)"}
+    pts = rng.uniform(-0.02, 0.02, (n, 3))
+    pts[:, 2] *= 0.2
+    out = {}
+    for k, p in par.items():
+        _loop(k, p, pts[:10], R)
+        best = math.inf
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            _loop(k, p, pts, R)
+            best = min(best, time.perf_counter() - t0)
+        out[names[k]] = best / n * 1e9
+    return out
+
+
+def grid_floor(m: int, cell: float = 4e-3) -> tuple[np.ndarray, np.ndarray]:
+    """Flat floor of m x m cells (2 m^2 triangles) centred on the origin."""
+    xs = (np.arange(m + 1) - 0.5 * m) * cell
+    xx, yy = np.meshgrid(xs, xs, indexing="ij")
+    verts = np.c_[xx.ravel(), yy.ravel(), np.zeros(xx.size)]
+    i, j = np.meshgrid(np.arange(m), np.arange(m), indexing="ij")
+    a = (i * (m + 1) + j).ravel()
+    b, c, d = a + (m + 1), a + (m + 2), a + 1
+    faces = np.concatenate([np.c_[a, b, c], np.c_[a, c, d]])
+    return verts, faces
+
+
+def sentinels(sim, w):
+    """Far-away boundaries of every kind: the scene compiles the same step module as
+    tests/test_boundaries.py (one compile for both)."""
+    sim.add_boundary("plane", material=w, point=(0, 0, -FAR), normal=(0, 0, 1))
+    sim.add_boundary("wall", material=w, center=(FAR, 0, 0), half_extents=(0.01, 0.01))
+    sim.add_boundary("tube", material=w, start=(FAR, FAR, 0), axis=(0, 0, 1), length=0.01,
+                     radius=0.01)
+    sim.add_boundary("bend", material=w, center=(-FAR, 0, 0), bend_radius=0.05,
+                     pipe_radius=0.01, angle=1.0)
+    sim.add_boundary("mesh", material=w, vertices=[(0, FAR, 0), (0.01, FAR, 0),
+                                                   (0, FAR + 0.01, 0)], faces=[(0, 1, 2)])
+    sim.add_boundary("sieve", material=w, center=(0, -FAR, 0), half_extents=(0.01, 0.01),
+                     hole=2e-3, bar=1e-3, clearance_model="fixed")
+
+
+def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 200) -> list[dict]:
+    rows = []
+    for m in sizes:
+        verts, faces = grid_floor(m)
+        a = dpm.Material("glass", density=2500.0, young=5e6, poisson=0.45)
+        w = dpm.Material("steel", density=7800.0, young=2e7, poisson=0.3)
+        sim = dpm.Simulation(dt=2e-6, gravity=(0, 0, 0), dt_check="off", threads=1)
+        sim.contact(a, a, model="hertz_mindlin", restitution=0.3, friction=0.5)
+        sim.contact(a, w, model="hertz_mindlin", restitution=0.3, friction=0.5)
+        t0 = time.perf_counter()
+        sim.add_boundary("mesh", material=w, vertices=verts, faces=faces)
+        sentinels(sim, w)
+        half = 0.5 * m * 4e-3
+        rng = np.random.default_rng(1)
+        # spheres on a jittered lattice (spacing 2.2 r) over the middle of the floor
+        k = max(1, min(int(math.ceil(math.sqrt(n_spheres))), int(2 * half / (2.2 * R))))
+        g = (np.arange(k) - 0.5 * (k - 1)) * 2.2 * R
+        xy = np.array([(x, y) for x in g for y in g])[:n_spheres]
+        xy = xy + rng.uniform(-0.02 * R, 0.02 * R, xy.shape)
+        pos = np.c_[xy, np.full(len(xy), R * 0.9999)]
+        sim.add_particles("sphere", material=a, radius=R, positions=pos)
+        sim.run(steps=0, progress=False)
+        prep = time.perf_counter() - t0
+        # (a) search: the counting pass of the candidate search (grid for the floor, plain
+        # loop for the sentinels) of every sphere, repeated for >= 0.05 s
+        e, wt = sim.elements, sim.walls
+        counts = np.zeros(len(pos), np.int64)
+        args = (e.position, e.radius, sim.skin, wt.frame, wt.kind, wt.par, wt.grid_int,
+                wt.grid_flt, wt.cell_start, wt.cell_items, wt.prim_cells, counts,
+                sim.wall_contacts.start, sim.wall_contacts.key, False)
+        sim._module.boundary_search_pass(*args)
+        reps = max(1, int(20000 / len(pos)))
+        best = math.inf
+        for _ in range(5):
+            t1 = time.perf_counter()
+            for _ in range(reps):
+                sim._module.boundary_search_pass(*args)
+            best = min(best, (time.perf_counter() - t1) / reps)
+        rebuild = best / len(pos)
+        # (b) steps without rebuild (the spheres barely move)
+        sim.run(steps=5, progress=False)
+        best = math.inf
+        for _ in range(3):
+            r0 = sim.rebuild_count
+            t1 = time.perf_counter()
+            sim.run(steps=steps, progress=False)
+            el = time.perf_counter() - t1
+            if sim.rebuild_count == r0:
+                best = min(best, el)
+        entries = int(sim.wall_contacts.count)
+        rows.append(dict(triangles=len(faces), spheres=len(pos), prepare_s=prep,
+                         rebuild_us_per_sphere=rebuild * 1e6,
+                         step_us_per_sphere=best / steps / len(pos) * 1e6,
+                         candidates_per_sphere=entries / len(pos)))
+        print(rows[-1], flush=True)
+    return rows
+
+
+def plot(res: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
+    names = list(res["per_kind_ns"])
+    ax1.barh(names, [res["per_kind_ns"][n] for n in names], color="tab:blue")
+    ax1.set_xlabel("ns per element-primitive check (closest_any, 1 thread)")
+    ax1.set_title("contact geometry per boundary kind")
+    rows = res["mesh"]
+    tri = [r["triangles"] for r in rows]
+    ax2.loglog(tri, [r["rebuild_us_per_sphere"] for r in rows], "o-",
+               label="candidate search per sphere")
+    ax2.loglog(tri, [r["step_us_per_sphere"] for r in rows], "s-",
+               label="step per sphere (contact pass, no rebuild)")
+    ax2.loglog(tri, [r["prepare_s"] / r["triangles"] * 1e6 for r in rows], "^--",
+               label="prepare per triangle (once)")
+    t = np.array(tri, float)
+    base = rows[0]["rebuild_us_per_sphere"]
+    ax2.loglog(t, base * (1 + np.log(t / t[0])), ":", color="gray",
+               label="1 + log(n / 2): log growth, for scale")
+    ax2.set_xlabel("triangles in the floor mesh")
+    ax2.set_ylabel("time [us]")
+    ax2.set_title("flat floor mesh, up to 2000 spheres resting (r = 2 mm, cells 4 mm)",
+                  fontsize=10)
+    ax2.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--plot-only", action="store_true", help="redraw the PNG from the JSON")
+    args = ap.parse_args()
+    if args.plot_only:
+        name = "boundaries_quick" if args.quick else "boundaries"
+        plot(json.loads((OUT / f"{name}.json").read_text()), OUT / f"{name}.png")
+        return
+    numba.set_num_threads(1)  # the search kernels are parallel loops; time one thread
+    sizes = [1, 3, 10, 32, 100, 316] if not args.quick else [1, 10, 100]
+    res = {"machine": platform.processor() or platform.machine(),
+           "numba": numba.__version__, "per_kind_ns": per_kind()}
+    print(res["per_kind_ns"], flush=True)
+    mesh_scaling([1], n_spheres=1, steps=5)  # compile / load the step module first
+    res["mesh"] = mesh_scaling(sizes)
+    OUT.mkdir(exist_ok=True)
+    name = "boundaries_quick" if args.quick else "boundaries"
+    (OUT / f"{name}.json").write_text(json.dumps(res, indent=1))
+    plot(res, OUT / f"{name}.png")
+    print("wrote", OUT / f"{name}.json")
+
+
+if __name__ == "__main__":
+    main()
