@@ -71,7 +71,8 @@ def _closest_lines(kinds: list[int], periodic: bool) -> list[str]:
     kinds = sorted(set(kinds)) or [0]
     names = ", ".join(_KIND_FUNCS[k] for k in kinds)
     lines = [f"from .boundary_geometry import {names}", "",
-             f"HAS_TRIANGLES = {4 in kinds}", f"PERIODIC = {bool(periodic)}", "", "",
+             f"HAS_TRIANGLES = {4 in kinds}", f"HAS_JOINTS = {2 in kinds or 3 in kinds}",
+             f"PERIODIC = {bool(periodic)}", "", "",
              "@inline_jit",
              "def closest(kind, p, x, y, z, r):",
              '    """Contact geometry of the boundary kinds of this scene."""']
@@ -80,8 +81,8 @@ def _closest_lines(kinds: list[int], periodic: bool) -> list[str]:
         if n < len(kinds) - 1:
             lines.append(f"    if kind == {k}:")
             pad = "        "
-        if k == 4:
-            lines.append(f"{pad}return triangle_distance(p, x, y, z)")
+        if k in (2, 3, 4):  # these return their feature
+            lines.append(f"{pad}return {_KIND_FUNCS[k]}(p, x, y, z)")
             continue
         extra = ", r" if k == 5 else ""
         lines.append(f"{pad}d, nx, ny, nz = {_KIND_FUNCS[k]}(p, x, y, z{extra})")

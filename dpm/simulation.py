@@ -633,7 +633,8 @@ class Simulation:
         n_el = len(self.elements)
         if self.skin is None:
             self.skin = 0.4 * float(self.elements.radius.min())
-        # boundaries: primitives, frames, search grids
+        # boundaries: pipe joints, primitives, frames, search grids
+        self._join_pipe_ends()
         self.walls = BoundaryTable(self.boundaries, lambda m: self._material_index(m, ""),
                                    float(self.elements.radius.max()) + self.skin)
         self._moving = any(bd.motion is not None for bd in self.boundaries)
@@ -697,6 +698,25 @@ class Simulation:
                 c.t_pair, wc.start, wc.key, wc.history, wc.active, wc.force, wc.tag,
                 wc.new_start, wc.new_key, wc.new_history, wc.new_active, self._bnd(),
                 self._pair_model, self._pair_params, self._e_worst, self._e_count, self._diag)
+
+    def _join_pipe_ends(self) -> None:
+        """Mark open ends of tubes and bends that meet another piece's open end (same
+        centre, opposite outward direction, same radius, same motion object) as joined."""
+        ends = []
+        for bd in self.boundaries:
+            if hasattr(bd, "pipe_ends"):
+                bd.joined = set()
+                for name, c, d, r in bd.pipe_ends():
+                    ends.append((bd, name, np.asarray(c, float), np.asarray(d, float), r))
+        for k, (b1, n1, c1, d1, r1) in enumerate(ends):
+            for b2, n2, c2, d2, r2 in ends[k + 1:]:
+                if b1 is b2 or b1.motion is not b2.motion:
+                    continue
+                tol = 1e-9 * max(r1, r2)
+                if (np.linalg.norm(c1 - c2) <= tol and float(d1 @ d2) < -1 + 1e-9
+                        and abs(r1 - r2) <= tol):
+                    b1.joined.add(n1)
+                    b2.joined.add(n2)
 
     def _bnd(self) -> tuple:
         """The boundary arrays the kernels take as one tuple (see kernels/step.py)."""

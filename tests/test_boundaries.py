@@ -276,10 +276,7 @@ ROLLS = {
 
 @pytest.mark.parametrize("name", [
     *[n for n in ROLLS if n != "landing_next_to_an_edge"],
-    pytest.param("landing_next_to_an_edge", marks=pytest.mark.xfail(strict=True, reason=(
-        "boundary_geometry.triangle_distance promotes a rim contact whose direction is within "
-        "1.4e-6 rad of the face normal to FACE but keeps the tilted direction; mesh_contact "
-        "rule 1 then may keep it and drop the neighbour's true face contact (bump ~1e-5)"))),
+    "landing_next_to_an_edge",
 ])
 def test_mesh_floor_feels_like_the_plane(name):
     """Rolling (or sliding into rolling) across edges and fan vertices of a flat mesh: the
@@ -392,10 +389,6 @@ def test_drum_torque_and_power_of_a_stuck_block():
     assert rows[-1][-1] > rows[0][-1] + 2.0  # it rode up with the wall
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "kernels/step.py contact_pass: the boundary's torque row wl_f[q, 6:9] = -(o x f) lacks "
-    "the reaction of the rolling-resistance couple; measured torque is m g R sin(theta), R "
-    "the contact radius, instead of m g (R - r) sin(theta): 11 % high here"))
 def test_drum_torque_and_power_of_a_sphere_held_by_rolling_resistance():
     """As the block test, with a sphere held at theta by friction and EPSD rolling
     resistance (tan theta < mu_r): torque (x - A) x m g = m g (R - r) sin(theta) and power
@@ -515,11 +508,6 @@ def joined_pipe_history(split: bool, kind: str, steps: int = 1500) -> tuple[np.n
 
 
 @pytest.mark.parametrize("kind", ["tube", "bend"])
-@pytest.mark.xfail(strict=True, reason=(
-    "tube (AXI) and bend (TORUS) rims are always rounded: where two pieces meet, a ball "
-    "touches the end of one piece's wall and the rounded rim of the next at once (double "
-    "force, the ball is kicked up: measured |F| up to 5 m g at a tube joint, 3.6 m g at a "
-    "bend joint)"))
 def test_pipe_joint_feels_like_one_piece(kind):
     """A ball rolling across the joint of two tube (or bend) pieces feels the force history
     of the same run in one unsplit piece, within 1e-6 m g at every step."""

@@ -23,7 +23,8 @@ class Bend(Boundary):
     (clamped to the segment), and in that cross-section plane the distance to the pipe
     circle minus thickness / 2; inside and outside both touch, the end rings are rounded.
     A :class:`~dpm.boundaries.tube.Tube` ending at center + R e1 with axis e2 joins it
-    smoothly (see :meth:`start_point`, :meth:`end_point`, :meth:`end_direction`).
+    smoothly (see :meth:`start_point`, :meth:`end_point`, :meth:`end_direction`): ends that
+    meet are joined (no rounded rim there, see :class:`~dpm.boundaries.tube.Tube`).
     """
 
     name = "bend"
@@ -57,6 +58,13 @@ class Bend(Boundary):
                                  f"bend_radius={self.R:g}")
         self.angle = float(p["angle"])
         self.h = 0.5 * float(p["thickness"])
+        #: ends ("start", "end") joined to another pipe piece (see Tube.pipe_ends)
+        self.joined: set[str] = set()
+
+    def pipe_ends(self) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+        """(name, centre, outward pipe direction, pipe radius) of both ends."""
+        return [("start", self.start_point(), -self.direction(0.0), self.rp),
+                ("end", self.end_point(), self.end_direction(), self.rp)]
 
     def point(self, phi: float) -> np.ndarray:
         return self.center + self.R * (math.cos(phi) * self.e1 + math.sin(phi) * self.e2)
@@ -80,7 +88,8 @@ class Bend(Boundary):
     def primitives(self) -> Primitives:
         pad = self.R + self.rp + self.h
         lo, hi = self.center - pad, self.center + pad
-        row = [*self.center, *self.axis, *self.e1, self.R, self.rp, self.angle, self.h]
+        flags = (1 if "start" in self.joined else 0) | (2 if "end" in self.joined else 0)
+        row = [*self.center, *self.axis, *self.e1, self.R, self.rp, self.angle, self.h, flags]
         prims = Primitives.build([(TORUS, row, (lo, hi))])
         prims.extent = float(np.linalg.norm(self.center)) + pad
         return prims

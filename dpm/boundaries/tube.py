@@ -23,7 +23,10 @@ class Tube(Boundary):
     Contact (kernel kind AXI, a surface of revolution of a meridian segment): in the plane
     (rho, z) through the axis and the sphere centre, the distance to the segment from
     (r_start, 0) to (r_end, length) minus thickness / 2. Spheres touch it from inside and
-    from outside; the rims are rounded. A cap is the segment from (0, z) to (r, z).
+    from outside; the rims are rounded. A cap is the segment from (0, z) to (r, z). An open
+    end that meets another tube's or bend's open end (same centre, opposite direction, same
+    radius, same motion) is joined: no rim there, so a ball crosses the joint as inside one
+    pipe.
     """
 
     name = "tube"
@@ -59,6 +62,18 @@ class Tube(Boundary):
             raise ParameterError(f"{call}: caps={p['caps']!r}; allowed: {', '.join(CAPS)}")
         self.caps = p["caps"]
         self.h = 0.5 * float(p["thickness"])
+        #: ends ("start", "end") joined to another pipe piece (set by the simulation when
+        #: an end meets another piece's end of the same radius; see pipe_ends)
+        self.joined: set[str] = set()
+
+    def pipe_ends(self) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+        """(name, centre, outward axis, radius) of the open ends."""
+        ends = []
+        if self.caps not in ("start", "both"):
+            ends.append(("start", self.start, -self.axis, self.r0))
+        if self.caps not in ("end", "both"):
+            ends.append(("end", self.end, self.axis, self.r1))
+        return ends
 
     @property
     def end(self) -> np.ndarray:
@@ -89,7 +104,8 @@ class Tube(Boundary):
         rmax = max(self.r0, self.r1) + h
         lo = np.minimum(o, self.end) - rmax
         hi = np.maximum(o, self.end) + rmax
-        rows = [(AXI, [*o, *a, self.r0, 0.0, self.r1, L, h], (lo, hi))]
+        flags = (1 if "start" in self.joined else 0) | (2 if "end" in self.joined else 0)
+        rows = [(AXI, [*o, *a, self.r0, 0.0, self.r1, L, h, flags], (lo, hi))]
         if self.caps in ("start", "both"):
             rows.append((AXI, [*o, *a, 0.0, 0.0, self.r0, 0.0, h], (lo, hi)))
         if self.caps in ("end", "both"):

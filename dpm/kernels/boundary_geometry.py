@@ -9,7 +9,8 @@ centres into it). :func:`closest` returns, for a sphere centre ``(x, y, z)``:
              the overlap of a sphere of radius r is r - dist)
     nx,ny,nz unit normal from the surface towards the centre (the direction of the force
              on the sphere)
-    feature  0 face, 1-3 edge (v0v1, v1v2, v2v0), 4-6 vertex v0-v2 (triangles); 0 else
+    feature  0 face, 1-3 edge (v0v1, v1v2, v2v0), 4-6 vertex v0-v2 (triangles); JOINED (7)
+             beyond a joined pipe end (no force); 0 else
 
 Kinds and their ``par`` columns:
 
@@ -21,12 +22,15 @@ SLAB (1)      finite wall: centre c [0:3], unit axes u [3:6], v [6:9], half exte
               inside the box takes the nearest face (dist < 0).
 AXI (2)       surface of revolution of a straight meridian segment: axis origin o [0:3],
               unit axis a [3:6], segment (rho0, z0) [6:8] to (rho1, z1) [8:10], half
-              thickness h [10]. A frustum wall (tube, cone), an annulus or a disc (rho0 = 0):
-              dist = distance in the meridian plane (rho, z) to the segment, minus h; both
-              sides touch, the segment's ends are rounded edges.
+              thickness h [10], joined ends [11] (bit 0: z < z0, bit 1: z > z1). A frustum
+              wall (tube, cone), an annulus or a disc (rho0 = 0): dist = distance in the
+              meridian plane (rho, z) to the segment, minus h; both sides touch, the
+              segment's ends are rounded edges, except at an end joined to another pipe
+              piece: a centre beyond it belongs to the next piece (no contact here).
 TORUS (3)     bend: centre c [0:3], unit axis a [3:6] (normal of the bend plane), unit e1
               [6:9] (direction of angle 0; e2 = a x e1), bend radius R [9], pipe radius rp
-              [10], bend angle theta [11], half thickness h [12]. The pipe wall of the torus
+              [10], bend angle theta [11], half thickness h [12], joined ends [13] (bit 0:
+              angle 0, bit 1: angle theta; as for AXI). The pipe wall of the torus
               segment 0 <= phi <= theta: the centre circle point C(phi) at the clamped angle,
               dist = |(rho' - rp, w_t)| - h in the pipe's cross-section plane, so the pipe's
               end rings are rounded edges; inside and outside both touch.
@@ -63,6 +67,9 @@ SIEVE = 5
 
 # feature codes of triangle contacts
 FACE = 0
+#: feature of a surface of revolution or torus contact beyond an end joined to another
+#: pipe piece: listed as a candidate (distance as usual) but exerting no force
+JOINED = 7
 
 
 @inline_jit
@@ -170,8 +177,12 @@ def axi_distance(p, x, y, z):
         rz *= inv
     else:
         rx, ry, rz = _unit_perpendicular(ax, ay, az)
+    flags = int(p[11])
+    # beyond an end joined to the next piece, the contact is that piece's
+    feature = JOINED if flags != 0 and ((flags & 1 and zz < p[7]) or
+                                        (flags & 2 and zz > p[9])) else 0
     er, ez, d = _segment_2d(rho, zz, p[6], p[7], p[8], p[9])
-    return (d - p[10], er * rx + ez * ax, er * ry + ez * ay, er * rz + ez * az)
+    return (d - p[10], er * rx + ez * ax, er * ry + ez * ay, er * rz + ez * az, feature)
 
 
 @inline_jit
@@ -193,8 +204,12 @@ def torus_distance(p, x, y, z):
     phi = math.atan2(py, px)
     if phi < 0.0:
         phi += 2.0 * math.pi
+    feature = 0
     if phi > theta:  # outside the segment: the nearer end ring
         phi = theta if phi - theta < 2.0 * math.pi - phi else 0.0
+        flags = int(p[13])
+        if flags != 0 and ((phi == 0.0 and flags & 1) or (phi == theta and flags & 2)):
+            feature = JOINED  # beyond an end joined to the next piece
     c = math.cos(phi)
     s = math.sin(phi)
     # pipe centre and tangent at phi, in (e1, e2, a) coordinates
@@ -228,7 +243,7 @@ def torus_distance(p, x, y, z):
     ly = er * qy + et * ty
     lz = er * qz
     return (d - p[12], lx * e1x + ly * e2x + lz * ax, lx * e1y + ly * e2y + lz * ay,
-            lx * e1z + ly * e2z + lz * az)
+            lx * e1z + ly * e2z + lz * az, feature)
 
 
 @inline_jit
@@ -286,9 +301,12 @@ def triangle_distance(p, x, y, z):
         ey *= inv
         ez *= inv
         # a closest point on an edge or vertex whose direction is the face normal lies on
-        # the face's rim: it is a face contact (the neighbour gives the same point)
-        if feature != FACE and abs(ex * fnx + ey * fny + ez * fnz) > 1.0 - 1e-12:
-            feature = FACE
+        # the face's rim: it is a face contact, with the face's normal and plane distance
+        # (the coplanar neighbour then gives identical geometry)
+        dot = ex * fnx + ey * fny + ez * fnz
+        if feature != FACE and abs(dot) > 1.0 - 1e-12:
+            sg = 1.0 if dot > 0.0 else -1.0
+            return d * abs(dot) - p[9], sg * fnx, sg * fny, sg * fnz, FACE
         return d - p[9], ex, ey, ez, feature
     return -p[9], fnx, fny, fnz, FACE
 
@@ -374,11 +392,9 @@ def closest_any(kind, p, x, y, z, r):
         d, nx, ny, nz = slab_distance(p, x, y, z)
         return d, nx, ny, nz, 0
     if kind == AXI:
-        d, nx, ny, nz = axi_distance(p, x, y, z)
-        return d, nx, ny, nz, 0
+        return axi_distance(p, x, y, z)
     if kind == TORUS:
-        d, nx, ny, nz = torus_distance(p, x, y, z)
-        return d, nx, ny, nz, 0
+        return torus_distance(p, x, y, z)
     if kind == TRIANGLE:
         return triangle_distance(p, x, y, z)
     d, nx, ny, nz = sieve_distance(p, x, y, z, r)

@@ -34,7 +34,7 @@ import numpy as np
 from numba import prange
 
 from .config import inline_jit, step_jit as jit, step_pjit as pjit
-from .boundary_geometry import TRIANGLE, in_range, touching
+from .boundary_geometry import AXI, JOINED, TORUS, TRIANGLE, in_range, touching
 from .boundary_search import boundary_motion_since_rebuild, to_local, to_world
 from .mesh_contact import resolve_triangle_contacts
 from .neighbours import _copy_back as copy_back, _merge as merge_history
@@ -49,6 +49,7 @@ from .integrate_velocity_verlet import pre_force_body, post_force_body
 from .boundary_geometry import plane_distance
 
 HAS_TRIANGLES = False
+HAS_JOINTS = False
 PERIODIC = False
 
 
@@ -121,6 +122,37 @@ def largest(values):
                 return v
             m = v
     return m
+
+
+@inline_jit
+def joint_hand_over(q0, q1, xi, yi, zi, ri, wl_w, wl_active, wl_hist, w_kind, w_par, w_owner,
+                    f_cur):
+    """A sphere crossing the joint of two pipe pieces: the contact that ends beyond the
+    joined end hands its history (tangential spring) to the one that starts on the next
+    piece, as across the edges of a mesh."""
+    nh = wl_hist.shape[1]
+    for q2 in range(q0, q1):
+        w2 = wl_w[q2]
+        k2 = w_kind[w2]
+        if not wl_active[q2] or (k2 != AXI and k2 != TORUS):
+            continue
+        lx, ly, lz = to_local(f_cur[w_owner[w2]], xi, yi, zi)
+        if closest(k2, w_par[w2], lx, ly, lz, ri)[4] != JOINED:
+            continue
+        for q in range(q0, q1):
+            w = wl_w[q]
+            k = w_kind[w]
+            if q == q2 or wl_active[q] or (k != AXI and k != TORUS):
+                continue
+            lx, ly, lz = to_local(f_cur[w_owner[w]], xi, yi, zi)
+            d, _, _, _, feature = closest(k, w_par[w], lx, ly, lz, ri)
+            if feature != JOINED and touching(k, d, ri):
+                for c in range(nh):
+                    wl_hist[q, c] = wl_hist[q2, c]
+                    wl_hist[q2, c] = 0.0
+                wl_active[q2] = 0
+                wl_active[q] = 1
+                break
 
 
 @pjit
@@ -255,14 +287,17 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
             if meshes:
                 resolve_triangle_contacts(q0, q1, wl_w, wl_tag, w_kind, w_owner, w_ids,
                                           w_par, wl_active, wl_hist)
+        if HAS_JOINTS:
+            joint_hand_over(q0, q1, xi, yi, zi, ri, wl_w, wl_active, wl_hist, w_kind, w_par,
+                            w_owner, f_cur)
         for q in range(q0, q1):
             w = wl_w[q]
             kind = w_kind[w]
             f = f_cur[w_owner[w]]
             lx, ly, lz = to_local(f, xi, yi, zi)
-            dist, lnx, lny, lnz, _ = closest(kind, w_par[w], lx, ly, lz, ri)
+            dist, lnx, lny, lnz, feature = closest(kind, w_par[w], lx, ly, lz, ri)
             if (not touching(kind, dist, ri) or (kind == TRIANGLE and wl_tag[q] < 0)
-                    or b_invmass[bi] == 0.0):
+                    or feature == JOINED or b_invmass[bi] == 0.0):
                 if wl_active[q]:
                     for c in range(nh):
                         wl_hist[q, c] = 0.0
@@ -306,6 +341,9 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
             ty = az * fx - ax * fz
             tz = ax * fy - ay * fx
             # the boundary's relative angular velocity is its frame's
+            rx = 0.0
+            ry = 0.0
+            rz = 0.0
             if p[6] != 0.0:
                 rx, ry, rz = rolling_torque(p, fn, ri, b_mass[bi], b_angvel[bi, 0] - f[15],
                                             b_angvel[bi, 1] - f[16], b_angvel[bi, 2] - f[17],
@@ -319,9 +357,11 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
             wl_f[q, 3] = tx
             wl_f[q, 4] = ty
             wl_f[q, 5] = tz
-            wl_f[q, 6] = -(oy * fz - oz * fy)
-            wl_f[q, 7] = -(oz * fx - ox * fz)
-            wl_f[q, 8] = -(ox * fy - oy * fx)
+            # reaction on the boundary: -F at the contact point and the opposite rolling
+            # resistance torque
+            wl_f[q, 6] = -(oy * fz - oz * fy) - rx
+            wl_f[q, 7] = -(oz * fx - ox * fz) - ry
+            wl_f[q, 8] = -(ox * fy - oy * fx) - rz
         e_worst[i] = worst
         e_count[i] = count
 
@@ -625,7 +665,7 @@ def entry_overlaps(e_pos, e_radius, wl_start, wl_w, kind, par, owner, frame):
         for q in range(wl_start[i], wl_start[i + 1]):
             w = wl_w[q]
             lx, ly, lz = to_local(frame[owner[w]], e_pos[i, 0], e_pos[i, 1], e_pos[i, 2])
-            d = closest(kind[w], par[w], lx, ly, lz, r)[0]
-            if touching(kind[w], d, r):
+            d, _, _, _, feature = closest(kind[w], par[w], lx, ly, lz, r)
+            if touching(kind[w], d, r) and feature != JOINED:
                 out[q] = (r - d) / r
     return out
