@@ -684,6 +684,8 @@ class Simulation:
                 break
         self.rebuild_count += int(d[2])
         d[2] = 0
+        c.force[:c.count] = 0.0  # rows of the new lists: the contact pass fills touching ones
+        wc.force[:wc.count] = 0.0
 
     def _args(self) -> tuple:
         """Arguments of ``run_steps``/``finish_step`` after ``dt`` (see kernels/step.py)."""

@@ -111,6 +111,15 @@ def begin_step(dt, update_elements, b_pos, b_vel, b_quat, b_angvel, b_force, b_t
             e_d2[e] = dx * dx + dy * dy + dz * dz
 
 
+@pjit
+def clear_rows(rows, count):
+    """Zero the first ``count`` force rows (after a rebuild the rows belong to new pairs;
+    the contact pass writes those that touch)."""
+    for k in prange(count):
+        for c in range(rows.shape[1]):
+            rows[k, c] = 0.0
+
+
 @jit
 def largest(values):
     """Largest value; NaN if any is NaN."""
@@ -195,9 +204,11 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
                 bj = e_owner[j]
                 ims = b_invmass[bi] + b_invmass[bj]
             if ims == 0.0:
-                if nl_active[kk]:
+                if nl_active[kk]:  # it stopped touching: clear its history and its row
                     for c in range(nh):
                         nl_hist[kk, c] = 0.0
+                    for c in range(9):
+                        nl_f[kk, c] = 0.0
                     nl_active[kk] = 0
                 continue
             nl_active[kk] = 1
@@ -302,6 +313,8 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
                     for c in range(nh):
                         wl_hist[q, c] = 0.0
                     wl_active[q] = 0
+                for c in range(9):  # (a hand-over may have deactivated it: always)
+                    wl_f[q, c] = 0.0
                 continue
             wl_active[q] = 1
             count += 1
@@ -384,31 +397,31 @@ def sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_
             # e_count[e]: touching contacts in e's own rows and boundary rows (contact
             # pass); none: nothing to add there (the sums are unchanged by skipping)
             own = e_count[e] > 0
+            # rows of pairs that do not touch are zero (cleared when a pair stops touching
+            # and at every rebuild), so they are added without a test: no mispredicted
+            # branches where touching and non-touching pairs alternate
             for kk in range(nl_start[e], nl_start[e + 1] if own else nl_start[e]):
-                if nl_active[kk]:
-                    fx += nl_f[kk, 0]
-                    fy += nl_f[kk, 1]
-                    fz += nl_f[kk, 2]
-                    tx += nl_f[kk, 3]
-                    ty += nl_f[kk, 4]
-                    tz += nl_f[kk, 5]
+                fx += nl_f[kk, 0]
+                fy += nl_f[kk, 1]
+                fz += nl_f[kk, 2]
+                tx += nl_f[kk, 3]
+                ty += nl_f[kk, 4]
+                tz += nl_f[kk, 5]
             for t in range(t_start[e], t_start[e + 1]):
                 kk = t_pair[t]
-                if nl_active[kk]:
-                    fx -= nl_f[kk, 0]
-                    fy -= nl_f[kk, 1]
-                    fz -= nl_f[kk, 2]
-                    tx += nl_f[kk, 6]
-                    ty += nl_f[kk, 7]
-                    tz += nl_f[kk, 8]
+                fx -= nl_f[kk, 0]
+                fy -= nl_f[kk, 1]
+                fz -= nl_f[kk, 2]
+                tx += nl_f[kk, 6]
+                ty += nl_f[kk, 7]
+                tz += nl_f[kk, 8]
             for q in range(wl_start[e], wl_start[e + 1] if own else wl_start[e]):
-                if wl_active[q]:
-                    fx += wl_f[q, 0]
-                    fy += wl_f[q, 1]
-                    fz += wl_f[q, 2]
-                    tx += wl_f[q, 3]
-                    ty += wl_f[q, 4]
-                    tz += wl_f[q, 5]
+                fx += wl_f[q, 0]
+                fy += wl_f[q, 1]
+                fz += wl_f[q, 2]
+                tx += wl_f[q, 3]
+                ty += wl_f[q, 4]
+                tz += wl_f[q, 5]
         b_force[b, 0] = fx
         b_force[b, 1] = fy
         b_force[b, 2] = fz
@@ -560,6 +573,8 @@ def finish_step(dt, gravity, skin, max_overlap, update_elements, b_pos, b_vel, b
                 wl_hist, wl_active, wnew_start, wnew_w, wnew_hist, wnew_active, bnd, diag)
         if diag[0] != STATUS_OK:
             return
+        clear_rows(nl_f, nl_start[e_pos.shape[0]])
+        clear_rows(wl_f, wl_start[e_pos.shape[0]])
     # (a run-time True: a literal would compile compute_forces a second time)
     worst = compute_forces(dt, skin == skin, gravity, b_pos, b_vel, b_quat, b_angvel, b_force,
                            b_torque,
