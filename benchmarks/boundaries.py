@@ -12,8 +12,15 @@
    bounded size the grid makes both independent of the triangle count; the table also
    reports the preparation (packing the triangles, feature flags, grid) per triangle.
 
+3. Peer: the same mesh scene in LIGGGHTS (when ``liggghts`` is on PATH), in the same run:
+   the floor written as an ASCII STL with the same triangles (``fix mesh/surface`` +
+   ``fix wall/gran ... mesh``), the same spheres, Hertz-Mindlin with the same material
+   constants, dt and number of steps, one core (benchmarks/scenes/mesh_floor). Its step
+   time per sphere is the "Loop time" of the timed ``run`` (best of three) and the ratio
+   dpm / LIGGGHTS is reported per triangle count.
+
 Run: ``python benchmarks/boundaries.py`` (writes benchmarks/results/boundaries.json and
-.png; ``--quick`` uses fewer sizes). LIGGGHTS is not compared (see docs/boundaries.md).
+.png; ``--quick`` uses fewer sizes, ``--no-liggghts`` skips the peer).
 """
 
 from __future__ import annotations
@@ -21,7 +28,12 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import platform
+import re
+import shutil
+import subprocess
+import tempfile
 import time
 from pathlib import Path
 
@@ -32,6 +44,7 @@ import dpm
 from dpm.kernels.boundary_geometry import AXI, PLANE, SIEVE, SLAB, TORUS, TRIANGLE, closest_any
 
 OUT = Path(__file__).parent / "results"
+SCENE = Path(__file__).parent / "scenes" / "mesh_floor"
 R = 2e-3
 FAR = 10.0
 
@@ -96,7 +109,54 @@ def sentinels(sim, w):
                      hole=2e-3, bar=1e-3, clearance_model="fixed")
 
 
-def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 200) -> list[dict]:
+def write_stl(path: Path, verts: np.ndarray, faces: np.ndarray) -> None:
+    """ASCII STL of the triangles (normals from the vertex order)."""
+    t = verts[faces]
+    nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    nrm /= np.linalg.norm(nrm, axis=1)[:, None]
+    rows = np.concatenate([nrm[:, None, :], t], axis=1).reshape(-1, 12)
+    facet = (" facet normal %.9g %.9g %.9g\n  outer loop\n" + "   vertex %.9g %.9g %.9g\n" * 3
+             + "  endloop\n endfacet\n")
+    with open(path, "w") as f:
+        f.write("solid floor\n")
+        f.write("".join(facet % tuple(r) for r in rows))
+        f.write("endsolid floor\n")
+
+
+def run_liggghts(verts, faces, pos, steps: int, repeats: int = 3) -> dict | None:
+    """The dpm mesh scene in LIGGGHTS (1 core): best "Loop time" of ``repeats`` runs of
+    ``steps`` steps after 5 warm-up steps, as us per step and sphere."""
+    exe = shutil.which("liggghts")
+    if exe is None:
+        return None
+    lo, hi = verts.min(0), verts.max(0)
+    pad = 2 * R
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        write_stl(d / "floor.stl", verts, faces)
+        with open(d / "mesh_floor.data", "w") as f:
+            f.write(f"mesh floor\n\n{len(pos)} atoms\n2 atom types\n\n"
+                    f"{lo[0] - pad} {hi[0] + pad} xlo xhi\n{lo[1] - pad} {hi[1] + pad} ylo yhi\n"
+                    f"{-pad} {3 * pad} zlo zhi\n\nAtoms\n\n")
+            f.write("".join(f"{i} 1 {2 * R} 2500.0 {p[0]:.9g} {p[1]:.9g} {p[2]:.9g}\n"
+                            for i, p in enumerate(pos, 1)))
+        shutil.copy(SCENE / "mesh_floor.liggghts", d)
+        cmd = [exe, "-in", "mesh_floor.liggghts", "-echo", "none", "-log", "log.txt",
+               "-var", "STEPS", str(steps), "-var", "REPEATS", str(repeats)]
+        t0 = time.perf_counter()
+        subprocess.run(cmd, cwd=tmp, check=True, capture_output=True, text=True,
+                       env={**os.environ, "OMP_NUM_THREADS": "1"})
+        whole = time.perf_counter() - t0
+        log = (d / "log.txt").read_text()
+    loops = [float(t) for t, n in re.findall(
+        r"Loop time of ([0-9.eE+-]+) on 1 procs for (\d+) steps", log) if int(n) == steps]
+    builds = [int(b) for b in re.findall(r"Neighbor list builds = (\d+)", log)]
+    return {"loop_s": min(loops), "whole_run_s": whole, "neighbor_builds": sum(builds),
+            "step_us_per_sphere": min(loops) / steps / len(pos) * 1e6}
+
+
+def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000,
+                 liggghts: bool = False) -> list[dict]:
     rows = []
     for m in sizes:
         verts, faces = grid_floor(m)
@@ -150,6 +210,14 @@ def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 200) -> list[dict]:
                          rebuild_us_per_sphere=rebuild * 1e6,
                          step_us_per_sphere=best / steps / len(pos) * 1e6,
                          candidates_per_sphere=entries / len(pos)))
+        if liggghts:
+            lg = run_liggghts(verts, faces, pos, steps)
+            if lg:
+                rows[-1].update(liggghts_step_us_per_sphere=lg["step_us_per_sphere"],
+                                liggghts_whole_run_s=lg["whole_run_s"],
+                                liggghts_neighbor_builds=lg["neighbor_builds"],
+                                ratio_dpm_over_liggghts=rows[-1]["step_us_per_sphere"]
+                                / lg["step_us_per_sphere"])
         print(rows[-1], flush=True)
     return rows
 
@@ -171,6 +239,16 @@ def plot(res: dict, path: Path) -> None:
                label="candidate search per sphere")
     ax2.loglog(tri, [r["step_us_per_sphere"] for r in rows], "s-",
                label="step per sphere (contact pass, no rebuild)")
+    lg = [r for r in rows if "liggghts_step_us_per_sphere" in r]
+    if lg:
+        lt = [r["triangles"] for r in lg]
+        ax2.loglog(lt, [r["liggghts_step_us_per_sphere"] for r in lg], "D-", color="tab:gray",
+                   label="LIGGGHTS step per sphere (same scene, 1 core)")
+        for r in lg:
+            ax2.annotate(f"{r['ratio_dpm_over_liggghts']:.2f}x",
+                         (r["triangles"], r["liggghts_step_us_per_sphere"]),
+                         textcoords="offset points", xytext=(0, -12), ha="center", fontsize=7,
+                         color="tab:gray")
     ax2.loglog(tri, [r["prepare_s"] / r["triangles"] * 1e6 for r in rows], "^--",
                label="prepare per triangle (once)")
     t = np.array(tri, float)
@@ -179,8 +257,10 @@ def plot(res: dict, path: Path) -> None:
                label="1 + log(n / 2): log growth, for scale")
     ax2.set_xlabel("triangles in the floor mesh")
     ax2.set_ylabel("time [us]")
-    ax2.set_title("flat floor mesh, up to 2000 spheres resting (r = 2 mm, cells 4 mm)",
-                  fontsize=10)
+    title = "flat floor mesh, up to 2000 spheres resting (r = 2 mm, cells 4 mm)"
+    if lg:
+        title += "\nlabels: dpm / LIGGGHTS step time per sphere"
+    ax2.set_title(title, fontsize=10)
     ax2.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -189,6 +269,7 @@ def plot(res: dict, path: Path) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--no-liggghts", action="store_true", help="skip the LIGGGHTS peer")
     ap.add_argument("--plot-only", action="store_true", help="redraw the PNG from the JSON")
     args = ap.parse_args()
     if args.plot_only:
@@ -201,7 +282,10 @@ def main() -> None:
            "numba": numba.__version__, "per_kind_ns": per_kind()}
     print(res["per_kind_ns"], flush=True)
     mesh_scaling([1], n_spheres=1, steps=5)  # compile / load the step module first
-    res["mesh"] = mesh_scaling(sizes)
+    res["mesh"] = mesh_scaling(sizes, liggghts=not args.no_liggghts)
+    res["liggghts"] = (None if args.no_liggghts or shutil.which("liggghts") is None else
+                       subprocess.run(["liggghts", "-h"], capture_output=True, text=True)
+                       .stdout.split("\n\n")[0].strip()[:120])
     OUT.mkdir(exist_ok=True)
     name = "boundaries_quick" if args.quick else "boundaries"
     (OUT / f"{name}.json").write_text(json.dumps(res, indent=1))
