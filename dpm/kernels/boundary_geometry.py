@@ -92,7 +92,9 @@ def plane_distance(p, x, y, z):
 
 
 @inline_jit
-def slab_distance(p, x, y, z):
+def plate_coordinates(p, x, y, z):
+    """Coordinates (s, t, w) of a point in a plate's axes u = p[3:6], v = p[6:9],
+    w = u x v about its centre p[0:3], and those axes."""
     dx = x - p[0]
     dy = y - p[1]
     dz = z - p[2]
@@ -101,9 +103,13 @@ def slab_distance(p, x, y, z):
     wx = uy * vz - uz * vy
     wy = uz * vx - ux * vz
     wz = ux * vy - uy * vx
-    s = dx * ux + dy * uy + dz * uz
-    t = dx * vx + dy * vy + dz * vz
-    w = dx * wx + dy * wy + dz * wz
+    return (dx * ux + dy * uy + dz * uz, dx * vx + dy * vy + dz * vz,
+            dx * wx + dy * wy + dz * wz, ux, uy, uz, vx, vy, vz, wx, wy, wz)
+
+
+@inline_jit
+def slab_distance(p, x, y, z):
+    s, t, w, ux, uy, uz, vx, vy, vz, wx, wy, wz = plate_coordinates(p, x, y, z)
     a = p[9]
     b = p[10]
     h = p[11]
@@ -315,17 +321,7 @@ def triangle_distance(p, x, y, z):
 def sieve_distance(p, x, y, z, r):
     """Distance to a sieve plate of a clearance model (see the module docstring); ``r`` the
     sphere radius (used by the radius-dependent model)."""
-    dx = x - p[0]
-    dy = y - p[1]
-    dz = z - p[2]
-    ux, uy, uz = p[3], p[4], p[5]
-    vx, vy, vz = p[6], p[7], p[8]
-    wx = uy * vz - uz * vy
-    wy = uz * vx - ux * vz
-    wz = ux * vy - uy * vx
-    s = dx * ux + dy * uy + dz * uz
-    t = dx * vx + dy * vy + dz * vz
-    w = dx * wx + dy * wy + dz * wz
+    s, t, w, ux, uy, uz, vx, vy, vz, wx, wy, wz = plate_coordinates(p, x, y, z)
     a = p[9]
     b = p[10]
     h = p[11]
