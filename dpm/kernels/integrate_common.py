@@ -2,8 +2,8 @@
 
 Kick-rotate-kick on the angular momentum (see :mod:`.integrate_velocity_verlet`): the exact
 world-frame rotation for isotropic bodies, the DLM splitting otherwise (:mod:`.rigid_rotation`).
-Velocity Verlet, position Verlet and the Gear predictor-correctors take their rotation
-from here.
+Velocity Verlet, position Verlet and the Gear predictor-correctors all take their
+rotation from this module.
 """
 
 from .config import inline_jit
