@@ -420,13 +420,16 @@ class Simulation:
                 pp = np.asarray(placed_pos)
                 d = np.linalg.norm(cand[:, None, :] - pp[None], axis=2)
                 ok &= np.all(d >= rb + np.asarray(placed_r)[None], axis=1)
-            if len(table.kind) and np.any(ok):
-                gaps = boundary_gaps(cand, np.full(len(cand), rb), table.frame, table.kind,
-                                     table.par, table.owner)
-                ok &= gaps >= 0.0
-            if not np.any(ok):
+            pick = -1
+            for k in np.flatnonzero(ok):  # the first candidate clear of every boundary
+                if len(table.kind) == 0 or boundary_gaps(
+                        cand[k:k + 1], np.array([rb]), table.frame, table.kind, table.par,
+                        table.owner)[0] >= 0.0:
+                    pick = int(k)
+                    break
+            if pick < 0:
                 break  # the region is full for now: the rest stays owed
-            p = cand[int(np.argmax(ok))]
+            p = cand[pick]
             q = (random_quaternions(inlet.rng, 1) if inlet.random_orientation
                  else np.array([[1.0, 0, 0, 0]]))
             ids = self.add_particles(sh, inlet.material, positions=p[None],
