@@ -132,6 +132,7 @@ class Simulation:
         self._next_id = 0
         self._prepared = False
         self._forces_valid = False
+        self._rows_stale = False  # pair force rows left stale by the fused pass
         self._writer = None
         #: the Writer of the latest output file (open or closed): .path, .frames
         self.last_output = None
@@ -633,6 +634,12 @@ class Simulation:
             ctx = PairContext(report.impact_speed, *self._smallest_pair(ia, ib))
             self._pair_params[ia, ib] = law.pair_row(self.materials[ia], self.materials[ib],
                                                      ctx)
+        # history floats per contact: the widest the laws use (3-5: the rolling spring)
+        width = max([law.history_slots for law in self._contacts.values()] + [3])
+        if np.any(self._pair_params[:, :, 6] != 0.0):
+            width = max(width, 6)
+        self.contacts.set_history_width(width)
+        self.wall_contacts.set_history_width(width)
         n_el = len(self.elements)
         if self.skin is None:
             self.skin = 0.4 * float(self.elements.radius.min())
@@ -694,6 +701,7 @@ class Simulation:
         """Arguments of ``run_steps``/``finish_step`` after ``dt`` (see kernels/step.py)."""
         b, e, c, wc, _w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
         return (self.gravity, self.skin, self.max_overlap, not self._spheres_only,
+                self._fused(),
                 b.position, b.velocity, b.orientation, b.angular_velocity, b.force, b.torque,
                 b.mass, b.invmass, b.invinertia, self._vf, self._wf, self._aux, b.element_start,
                 e.owner,
@@ -703,6 +711,17 @@ class Simulation:
                 c.t_pair, wc.start, wc.key, wc.history, wc.active, wc.force, wc.tag,
                 wc.new_start, wc.new_key, wc.new_history, wc.new_active, self._bnd(),
                 self._pair_model, self._pair_params, self._e_worst, self._e_count, self._diag)
+
+    def _fused(self) -> bool:
+        """Whether the step sums forces in one serial pass (kernels/step.py ``fused_pass``):
+        one thread and every body a single sphere. Its sums are bit for bit those of the
+        two-pass form; it writes no pair force rows, so those are zeroed when the two-pass
+        form takes over again."""
+        fused = self._spheres_only and numba.get_num_threads() == 1
+        if not fused and self._rows_stale:
+            self.contacts.force[:] = 0.0
+        self._rows_stale = fused
+        return fused
 
     def _join_pipe_ends(self) -> None:
         """Mark open ends of tubes and bends that meet another piece's open end (same
@@ -754,7 +773,8 @@ class Simulation:
         self._vf[:] = b.velocity
         self._wf[:] = b.angular_velocity
         self._module.compute_forces(
-            0.0, False, self.gravity, b.position, b.velocity, b.orientation, b.angular_velocity,
+            0.0, False, self._fused(), self.gravity, b.position, b.velocity, b.orientation,
+            b.angular_velocity,
             b.force, b.torque, b.mass, b.invmass, b.invinertia, self._vf, self._wf, self._aux,
             b.element_start, e.owner,
             e.radius, e.material, e.position,

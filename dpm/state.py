@@ -96,7 +96,22 @@ class _CsrList:
     FORCE_WIDTH = 9
 
     def __init__(self, n_elements: int = 0, capacity: int = 0) -> None:
+        #: history floats per entry (the widest the scene's contact laws declare)
+        self.history_width = N_HISTORY
         self.reset(n_elements, capacity)
+
+    def set_history_width(self, width: int) -> None:
+        """Give each entry ``width`` history floats, keeping the first ones."""
+        width = int(width)
+        if width == self.history_width:
+            return
+        keep = min(width, self.history_width)
+        self.history_width = width
+        for name in ("history", "new_history"):
+            old = getattr(self, name)
+            new = np.zeros((len(old), width))
+            new[:, :keep] = old[:, :keep]
+            setattr(self, name, new)
 
     def reset(self, n_elements: int, capacity: int) -> None:
         self.start = np.zeros(n_elements + 1, np.int64)
@@ -105,11 +120,11 @@ class _CsrList:
 
     def _allocate(self, cap: int) -> None:
         self.key = np.zeros(cap, np.int64)
-        self.history = np.zeros((cap, N_HISTORY))
+        self.history = np.zeros((cap, self.history_width))
         self.active = np.zeros(cap, np.uint8)
         self.force = np.zeros((cap, self.FORCE_WIDTH))
         self.new_key = np.zeros(cap, np.int64)
-        self.new_history = np.zeros((cap, N_HISTORY))
+        self.new_history = np.zeros((cap, self.history_width))
         self.new_active = np.zeros(cap, np.uint8)
 
     @property
@@ -160,7 +175,7 @@ class _CsrList:
 
 class Contacts(_CsrList):
     """Element pairs: half neighbour list in CSR form (``start``, ``key`` = partner j > i),
-    one history row (N_HISTORY floats), active flag and force row (F on i, torque on body
+    one history row (``history_width`` floats), active flag and force row (F on i, torque on body
     of i, torque on body of j) per pair; the transposed index ``t_start``/``t_pair``.
     Pairs are within r_i + r_j + skin."""
 

@@ -9,7 +9,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..errors import ParameterError
-from ..kernels.config import N_PAIR_PARAMS
+from ..kernels.config import N_HISTORY, N_PAIR_PARAMS
 from ..material import Material
 from ..parameters import Parameter, validate
 
@@ -62,6 +62,12 @@ class ImpactModel:
     parameters: ClassVar[dict[str, Parameter]] = dict(COMMON)
     kernel: ClassVar[tuple[str, str]] = ("", "")
     needs_elastic_constants: ClassVar[bool] = False
+    #: history floats per contact the kernel reads and writes, ``hist[k, 0:history_slots]``
+    #: (0-2: the tangential spring by convention; 6-7 free for the normal law). Slots 3-5
+    #: belong to the rolling spring and are added when a pair has rolling resistance. Each
+    #: scene allocates the widest its laws declare: a narrow history row is less memory
+    #: and less traffic per contact. The default, N_HISTORY, suits any law.
+    history_slots: ClassVar[int] = N_HISTORY
 
     def __init__(self, call: str | None = None, **params: Any) -> None:
         self.call = call or f"{type(self).__name__}()"

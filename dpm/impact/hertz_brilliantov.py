@@ -37,6 +37,7 @@ class HertzBrilliantov(ImpactModel):
 
     name = "hertz_brilliantov"
     kernel = ("dpm.kernels.law_hertz_brilliantov", "hertz_brilliantov")
+    history_slots = 3  # the tangential spring
     needs_elastic_constants = True
     parameters = {
         **{k: v for k, v in COMMON.items() if k != "restitution"},

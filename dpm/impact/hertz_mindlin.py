@@ -31,6 +31,7 @@ class HertzMindlin(ImpactModel):
 
     name = "hertz_mindlin"
     kernel = ("dpm.kernels.law_hertz_mindlin", "hertz_mindlin")
+    history_slots = 3  # the tangential spring
     needs_elastic_constants = True
 
     @property

@@ -80,6 +80,7 @@ class LinearSpringDashpot(ImpactModel):
 
     name = "linear_spring_dashpot"
     kernel = ("dpm.kernels.law_linear", "linear_spring_dashpot")
+    history_slots = 3  # the tangential spring
     parameters = {
         **COMMON,
         "stiffness": Parameter(low=0.0, low_open=True, unit="N/m", doc="normal stiffness k_n"),

@@ -34,6 +34,7 @@ class MawLinearSpring(ImpactModel):
 
     name = "maw_linear_spring"
     kernel = ("dpm.kernels.law_maw", "maw_linear_spring")
+    history_slots = 3  # the tangential spring
     needs_elastic_constants = True
     parameters = {
         **COMMON,

@@ -30,6 +30,7 @@ class WaltonBraun(ImpactModel):
 
     name = "walton_braun"
     kernel = ("dpm.kernels.law_walton_braun", "walton_braun")
+    history_slots = 8  # tangential spring, delta_max (6), delta_0 (7)
     parameters = {
         **COMMON,
         "stiffness": Parameter(low=0.0, low_open=True, unit="N/m",

@@ -131,6 +131,11 @@ def rotate_quaternion_derivative(q0, q1, q2, q3, wx, wy, wz, tx, ty, tz, i0, i1,
     return n0, n1, n2, n3, wx, wy, wz
 
 
+#: reciprocals of the Taylor series' divisors in rotate_isotropic
+INV_6, INV_12, INV_20, INV_30 = 1.0 / 6.0, 1.0 / 12.0, 1.0 / 20.0, 1.0 / 30.0
+INV_42, INV_56, INV_72 = 1.0 / 42.0, 1.0 / 56.0, 1.0 / 72.0
+
+
 @jit
 def rotate_isotropic(q0, q1, q2, q3, wx, wy, wz, dt):
     """q <- exp(omega dt / 2) (x) q for a world-frame omega, renormalised.
@@ -145,9 +150,10 @@ def rotate_isotropic(q0, q1, q2, q3, wx, wy, wz, dt):
         return q0, q1, q2, q3
     h2 = 0.25 * w2 * dt * dt  # (half angle)^2
     if h2 < 0.0025:  # half angle < 0.05 rad
-        a0 = 1.0 - h2 / 2.0 * (1.0 - h2 / 12.0 * (1.0 - h2 / 30.0 * (1.0 - h2 / 56.0)))
-        s = 0.5 * dt * (1.0 - h2 / 6.0 * (1.0 - h2 / 20.0 * (1.0 - h2 / 42.0
-                                                           * (1.0 - h2 / 72.0))))
+        # (products with the reciprocals: the divisions took a quarter of the update)
+        a0 = 1.0 - h2 * 0.5 * (1.0 - h2 * INV_12 * (1.0 - h2 * INV_30 * (1.0 - h2 * INV_56)))
+        s = 0.5 * dt * (1.0 - h2 * INV_6 * (1.0 - h2 * INV_20 * (1.0 - h2 * INV_42
+                                                            * (1.0 - h2 * INV_72))))
     else:
         w = math.sqrt(w2)
         half = 0.5 * w * dt
