@@ -1,15 +1,24 @@
-"""Where the box_settle step's time goes as the packing settles, 1 thread.
+"""Where the box_settle step's time goes as the packing settles, and what each form of the
+step costs there, 1 and 2 threads, in one process.
 
-Runs the 10,000-sphere box_settle scene (examples/box_settle.py) in stages of 5,000 steps
-and after each stage prints the wall time per step of the stage, its neighbour-list
-rebuilds, the listed and touching pairs, and the contact pass and sum pass timed alone
-(microseconds per step). The per-pass figures of benchmarks/NOTES.md row 12 come from it.
+Runs the 10,000-sphere box_settle scene (examples/box_settle.py: sphere orientation not
+integrated, as LIGGGHTS' nve/sphere) in stages of 5,000 steps. After each stage it times,
+on the same state, 3 x 100 steps of each variant in turn and prints the median wall time
+per step (microseconds):
+
+- ``fused``: the scene's step (fused force pass, no sphere orientation);
+- ``+orient``: the same with the sphere orientation integrated;
+- ``two-pass``: the two-pass force sum that clustered bodies use;
+
+and, for 2 threads, ``fused`` and ``two-pass`` again. The per-step figures of
+benchmarks/NOTES.md rows 13-16 come from it.
 
     python benchmarks/profile_box_settle.py
 """
 
 from __future__ import annotations
 
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -20,45 +29,43 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "examples"))
 import box_settle  # noqa: E402
 
 
-def timed(fn, reps: int) -> float:
-    fn()
+def per_step(sim, threads: int, two_pass: bool, orient: bool, steps: int = 100) -> float:
+    """Wall time per step [us] of ``steps`` steps in this variant (state carries on)."""
+    sim.threads = threads
+    sim._two_pass = two_pass
+    sim.sphere_orientation = orient
     t = time.perf_counter()
-    for _ in range(reps):
-        fn()
-    return (time.perf_counter() - t) / reps * 1e6
-
-
-def pass_times(sim) -> tuple[float, float]:
-    """Contact pass and sum pass of the current state, microseconds each."""
-    m = sim._module
-    b, e, c, wc = sim.bodies, sim.elements, sim.contacts, sim.wall_contacts
-    contact = timed(lambda: m.contact_pass(
-        0.0, b.position, sim._vf, sim._wf, b.mass, b.invmass, e.owner, e.radius,
-        e.material, e.position, c.start, c.key, c.history, c.active, c.force, wc.start,
-        wc.key, wc.history, wc.active, wc.force, wc.tag, sim._bnd(), sim._pair_model,
-        sim._pair_params, sim._e_worst, sim._e_count), 50)
-    summed = timed(lambda: m.sum_pass(
-        0.0, False, sim.gravity, b.position, b.velocity, b.orientation,
-        b.angular_velocity, b.force, b.torque, b.mass, b.invmass, b.invinertia, sim._aux,
-        b.element_start, c.start, c.active, c.force, c.t_start, c.t_pair, wc.start,
-        wc.active, wc.force, sim._e_count), 50)
-    return contact, summed
+    sim.run(steps=steps, progress=False)
+    return (time.perf_counter() - t) / steps * 1e6
 
 
 def main() -> None:
-    numba.set_num_threads(1)
     sim = box_settle.build(box_settle.initial_packing(20, 20, 25))
-    sim.threads = 1
+    variants = {"fused": (1, False, False), "+orient": (1, False, True),
+                "two-pass": (1, True, False)}
+    if numba.config.NUMBA_NUM_THREADS >= 2:
+        variants.update({"fused 2 threads": (2, False, False),
+                         "two-pass 2 threads": (2, True, False)})
+    for v in variants.values():  # compile every variant before timing
+        per_step(sim, *v, steps=2)
     for _ in range(4):
+        sim.threads = 1
+        sim._two_pass = False
+        sim.sphere_orientation = False
         t0 = time.perf_counter()
         r0 = sim.rebuild_count
         sim.run(steps=5000, progress=False)
         wall = time.perf_counter() - t0
-        contact, summed = pass_times(sim)
-        print(f"steps {sim.step_count}: {wall / 5000 * 1e6:.0f} us/step (first stage incl. "
-              f"compile), rebuilds {sim.rebuild_count - r0}, pairs {sim.contacts.count}, "
-              f"touching {int(sim._diag[6])}; contact pass {contact:.0f} us, sum pass "
-              f"{summed:.0f} us")
+        line = (f"steps {sim.step_count}: stage {wall / 5000 * 1e6:.0f} us/step, rebuilds "
+                f"{sim.rebuild_count - r0}, pairs {sim.contacts.count}, touching "
+                f"{int(sim._diag[6])} |")
+        times = {k: [] for k in variants}
+        for _ in range(3):
+            for k, v in variants.items():
+                times[k].append(per_step(sim, *v))
+        for k, ts in times.items():
+            line += f" {k} {statistics.median(ts):.0f}"
+        print(line, flush=True)
 
 
 if __name__ == "__main__":

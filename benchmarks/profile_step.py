@@ -2,8 +2,9 @@
 
 Builds the dilute or dense box of benchmarks/scaling.py (k^3 spheres), runs 50 steps, then
 times (microseconds per step) the whole step and its parts: ``begin`` (integrator pre-force
-part and element displacements), ``contact`` (contact pass), ``sum`` (per-body sums and
-integrator post-force part), and one neighbour-list ``rebuild``. The figures in
+part and element displacements), ``contact`` (contact pass of the two-pass form), ``sum``
+(its per-body sums and integrator post-force part), and one neighbour-list ``rebuild``.
+The whole step is the scene's own (the fused pass: every body is a sphere). The figures in
 benchmarks/NOTES.md come from this script.
 
     python benchmarks/profile_step.py 22 dense
@@ -47,7 +48,7 @@ def main() -> None:
     table = sim._frame_table(100, sim.step_count)
     step = timed(lambda: m.run_steps(100, dt, *args, table), 5) / 100
     begin = timed(lambda: m.begin_step(
-        0.0, False, b.position, b.velocity, b.orientation, b.angular_velocity, b.force,
+        0.0, False, False, b.position, b.velocity, b.orientation, b.angular_velocity, b.force,
         b.torque, b.invmass, b.invinertia, sim._vf, sim._wf, sim._aux, b.element_start,
         e.offset, e.position, e.reference, sim._e_worst), 200)
     contact = timed(lambda: m.contact_pass(

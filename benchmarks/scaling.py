@@ -56,6 +56,7 @@ def worker(k: int, case: str, threads: int, steps: int) -> dict:
 
     pos, vel, box = scene_arrays(k, case)
     sim = dpm.Simulation(dt=1e-5, gravity=(0, 0, CASES[case][2]), threads=threads,
+                         sphere_orientation=False,  # as LIGGGHTS' nve/sphere
                          overlap_tolerance=0.01)
     glass = dpm.Material("glass", density=RHO, young=5e6, poisson=0.45)
     sim.contact(glass, glass, model="hertz_mindlin", restitution=0.3, friction=0.5)

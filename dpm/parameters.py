@@ -44,7 +44,11 @@ class Parameter:
         return f"{lo}{_fmt(self.low)}, {_fmt(self.high)}{hi}"
 
     def problems(self, name: str, value: Any) -> list[str]:
-        if self.kind in ("str", "any", "bool"):
+        if self.kind == "bool":
+            if isinstance(value, bool | np.bool_):
+                return []
+            return [f"{name}={value!r}; allowed: True or False"]
+        if self.kind in ("str", "any"):
             return []
         if self.kind == "vector":
             arr = np.asarray(value, dtype=float)

@@ -65,14 +65,14 @@ _KIND_FUNCS = {0: "plane_distance", 1: "slab_distance", 2: "axi_distance",
                3: "torus_distance", 4: "triangle_distance", 5: "sieve_distance"}
 
 
-def _closest_lines(kinds: list[int], periodic: bool) -> list[str]:
+def _closest_lines(kinds: list[int], periodic: bool, fused: bool) -> list[str]:
     """A ``closest`` dispatching over the boundary kinds of the scene only; the scene's
-    constants (meshes present, periodic axes)."""
+    constants (meshes present, periodic axes, which force pass)."""
     kinds = sorted(set(kinds)) or [0]
     names = ", ".join(_KIND_FUNCS[k] for k in kinds)
     lines = [f"from .boundary_geometry import {names}", "",
              f"HAS_TRIANGLES = {4 in kinds}", f"HAS_JOINTS = {2 in kinds or 3 in kinds}",
-             f"PERIODIC = {bool(periodic)}", "", "",
+             f"PERIODIC = {bool(periodic)}", f"FUSED = {bool(fused)}", "", "",
              "@inline_jit",
              "def closest(kind, p, x, y, z, r):",
              '    """Contact geometry of the boundary kinds of this scene."""']
@@ -91,15 +91,21 @@ def _closest_lines(kinds: list[int], periodic: bool) -> list[str]:
 
 
 def render(laws: list[tuple[str, str]], integrator_module: str,
-           kinds: list[int] | None = None, periodic: bool = False) -> str:
-    """Source of the step module for these (module, function) laws, integrator and
-    boundary kinds."""
+           kinds: list[int] | None = None, periodic: bool = False,
+           fused: bool = False) -> str:
+    """Source of the step module for these (module, function) laws, integrator, boundary
+    kinds, periodic axes and force pass (``fused``: every body a single sphere)."""
     template = (Path(kernels.__file__).parent / "step.py").read_text()
     lines = [_BEGIN]
     for k, (mod, fn) in enumerate(laws):
         lines.append(f"from {mod} import {fn} as law_{k}")
-    lines.append(f"from {integrator_module} import pre_force_body, post_force_body")
-    lines += _closest_lines(kinds or [], periodic)
+    if hasattr(importlib.import_module(integrator_module), "pre_force_sphere"):
+        lines.append(f"from {integrator_module} import pre_force_body, pre_force_sphere, "
+                     "post_force_body")
+    else:  # (optional: the pre-force part of a sphere whose orientation is not tracked)
+        lines.append(f"from {integrator_module} import pre_force_body, post_force_body")
+        lines.append("pre_force_sphere = pre_force_body")
+    lines += _closest_lines(kinds or [], periodic, fused)
     lines += ["", "", "@inline_jit",
               "def pair_force(model, p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, "
               "dt, hist, k):",
@@ -118,12 +124,13 @@ def render(laws: list[tuple[str, str]], integrator_module: str,
 
 
 def step_module(laws: list[tuple[str, str]], integrator_module: str,
-                kinds: list[int] | None = None, periodic: bool = False) -> ModuleType:
-    """Import (generating if needed) the step module for these laws, integrator and
-    boundary kinds."""
+                kinds: list[int] | None = None, periodic: bool = False,
+                fused: bool = False) -> ModuleType:
+    """Import (generating if needed) the step module for these laws, integrator, boundary
+    kinds, periodic axes and force pass."""
     if not laws:
         laws = [("dpm.kernels.law_linear", "linear_spring_dashpot")]
-    src = render(laws, integrator_module, kinds, periodic)
+    src = render(laws, integrator_module, kinds, periodic, fused)
     h = hashlib.sha256(src.encode())
     for mod in sorted({m for m, _ in laws} | {integrator_module}):
         importlib.import_module(mod)

@@ -94,11 +94,23 @@ class _CsrList:
     plus the scratch buffers of the next rebuild (same sizes)."""
 
     FORCE_WIDTH = 9
+    ALWAYS_ROWS = True
 
     def __init__(self, n_elements: int = 0, capacity: int = 0) -> None:
         #: history floats per entry (the widest the scene's contact laws declare)
         self.history_width = N_HISTORY
+        #: whether the force rows are allocated (see :meth:`use_rows`)
+        self.rows = self.ALWAYS_ROWS
         self.reset(n_elements, capacity)
+
+    def use_rows(self, rows: bool) -> None:
+        """Allocate the force rows (zeroed) or drop them. The fused force pass of
+        one-thread sphere scenes needs none: it adds each pair's force to both bodies as
+        it computes it, so a scene then carries no 72-byte row per pair."""
+        rows = bool(rows) or self.ALWAYS_ROWS
+        if rows != self.rows:
+            self.rows = rows
+            self.force = np.zeros((self.capacity if rows else 0, self.FORCE_WIDTH))
 
     def set_history_width(self, width: int) -> None:
         """Give each entry ``width`` history floats, keeping the first ones."""
@@ -122,7 +134,7 @@ class _CsrList:
         self.key = np.zeros(cap, np.int64)
         self.history = np.zeros((cap, self.history_width))
         self.active = np.zeros(cap, np.uint8)
-        self.force = np.zeros((cap, self.FORCE_WIDTH))
+        self.force = np.zeros((cap if self.rows else 0, self.FORCE_WIDTH))
         self.new_key = np.zeros(cap, np.int64)
         self.new_history = np.zeros((cap, self.history_width))
         self.new_active = np.zeros(cap, np.uint8)
@@ -177,7 +189,10 @@ class Contacts(_CsrList):
     """Element pairs: half neighbour list in CSR form (``start``, ``key`` = partner j > i),
     one history row (``history_width`` floats), active flag and force row (F on i, torque on body
     of i, torque on body of j) per pair; the transposed index ``t_start``/``t_pair``.
-    Pairs are within r_i + r_j + skin."""
+    Pairs are within r_i + r_j + skin. The force rows are allocated only while a force
+    pass needs them (:meth:`use_rows`)."""
+
+    ALWAYS_ROWS = False
 
     def reset(self, n_elements: int, capacity: int) -> None:
         super().reset(n_elements, capacity)

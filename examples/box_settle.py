@@ -42,7 +42,10 @@ def build(csv: Path, dt: float = 1e-5) -> dpm.Simulation:
     with open(csv) as f:
         box = [float(x) for x in f.readline().split("box=")[1].split(",")]
     data = np.loadtxt(csv, delimiter=",", skiprows=1)
-    sim = dpm.Simulation(dt=dt, gravity=(0.0, 0.0, -9.81), integrator="velocity_verlet")
+    # the physics of the LIGGGHTS input (fix nve/sphere): no force depends on a sphere's
+    # orientation, so it is not integrated
+    sim = dpm.Simulation(dt=dt, gravity=(0.0, 0.0, -9.81), integrator="velocity_verlet",
+                         sphere_orientation=False)
     glass = dpm.Material("glass", density=2500.0, young=5e6, poisson=0.45)
     sim.contact(glass, glass, model="hertz_mindlin", restitution=0.3, friction=0.5)
     sim.add_boundary("box", material=glass, lower=(0.0, 0.0, 0.0), upper=box, open=("+z",))

@@ -468,7 +468,7 @@ def test_scene_binds_only_the_laws_it_uses(monkeypatch):
     class Stop(Exception):
         pass
 
-    def record(laws, integrator_module, kinds=None, periodic=False):
+    def record(laws, integrator_module, kinds=None, periodic=False, fused=False):
         seen.append(list(laws))
         raise Stop
 

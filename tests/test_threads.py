@@ -1,4 +1,6 @@
-"""The step gives the same trajectories for any number of threads (two-pass force sum)."""
+"""The step gives the same trajectories for any number of threads, whichever way it sums
+the forces: the fused pass of sphere scenes (one chunk per thread) and the two-pass sum of
+clustered bodies add every contribution in the same order."""
 
 import numba
 import numpy as np
@@ -7,7 +9,7 @@ import pytest
 import dpm
 
 
-def _scene(threads):
+def _scene(threads, clusters=False):
     sim = dpm.Simulation(dt=5e-6, gravity=(0, 0, -9.81), threads=threads)
     glass = dpm.Material("glass", density=2500, young=5e6, poisson=0.45)
     steel = dpm.Material("steel", density=7800, young=2e8, poisson=0.3)
@@ -24,16 +26,28 @@ def _scene(threads):
     sim.add_particles("sphere", material=glass, positions=xyz[:half],
                       radius=rng.uniform(0.8e-3, 1.0e-3, half),
                       velocities=rng.uniform(-0.1, 0.1, (half, 3)))
-    sim.add_particles("sphere", material=steel, positions=xyz[half:], radius=0.9e-3,
-                      velocities=rng.uniform(-0.1, 0.1, (len(xyz) - half, 3)))
+    if clusters:  # clusters of 11 sub-spheres: the two-pass sum
+        sim.add_particles("cylinder", material=steel, positions=xyz[half:], r=0.45e-3,
+                          l=0.9e-3, resolution=0.1,
+                          velocities=rng.uniform(-0.1, 0.1, (len(xyz) - half, 3)))
+    else:
+        sim.add_particles("sphere", material=steel, positions=xyz[half:], radius=0.9e-3,
+                          velocities=rng.uniform(-0.1, 0.1, (len(xyz) - half, 3)))
     return sim
 
 
+def _state(sim):
+    return (sim.bodies.position.copy(), sim.bodies.velocity.copy(),
+            sim.bodies.angular_velocity.copy(), sim.boundaries[0].force.copy())
+
+
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 threads")
-def test_one_and_two_threads_give_identical_trajectories():
+@pytest.mark.parametrize("two_pass", [False, True])
+def test_one_and_two_threads_give_identical_trajectories(two_pass):
     runs = []
     for threads in (1, 2):
         sim = _scene(threads)
+        sim._two_pass = two_pass
         sim.run(steps=5000, progress=False)
         assert sim._diag[6] > 20  # a colliding scene, not a free fall
         runs.append((sim.bodies.position.copy(), sim.bodies.velocity.copy(),
@@ -41,3 +55,36 @@ def test_one_and_two_threads_give_identical_trajectories():
     for a, b in zip(*runs, strict=True):
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * np.abs(a).max())
         np.testing.assert_array_equal(a, b)  # in fact bit for bit
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 threads")
+def test_fused_pass_and_two_pass_sum_agree_bit_for_bit():
+    """Sphere scenes sum forces as they are computed, in one chunk per thread; the
+    two-pass sum of the same scene gives the same numbers, and so does switching between
+    the two in the middle of a run (the fused pass leaves stale force rows)."""
+    runs = []
+    for threads, two_pass in ((1, False), (2, False), (2, True), (1, "switch")):
+        sim = _scene(threads)
+        if two_pass == "switch":
+            for k in range(4):
+                sim._two_pass = k % 2 == 1
+                sim.run(steps=500, progress=False)
+        else:
+            sim._two_pass = two_pass
+            sim.run(steps=2000, progress=False)
+        runs.append(_state(sim))
+    for other in runs[1:]:
+        for a, b in zip(runs[0], other, strict=True):
+            np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 threads")
+def test_clustered_bodies_one_and_two_threads_identical():
+    runs = []
+    for threads in (1, 2):
+        sim = _scene(threads, clusters=True)
+        sim.run(steps=3000, progress=False)
+        assert sim._fused() == 0 and sim._diag[6] > 5
+        runs.append(_state(sim))
+    for a, b in zip(*runs, strict=True):
+        np.testing.assert_array_equal(a, b)

@@ -19,10 +19,11 @@ from __future__ import annotations
 import math
 from functools import lru_cache
 
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
-
+from .._lazy import lazy_module
 from ..errors import ParameterError
+
+integrate = lazy_module("scipy.integrate")
+optimize = lazy_module("scipy.optimize")
 
 SQRT5 = math.sqrt(5.0)
 
@@ -49,8 +50,8 @@ def _collide(force) -> tuple[float, float, float]:
     def turn(t, y):
         return y[1]
 
-    sol = solve_ivp(rhs, (0.0, 100.0), [0.0, 1.0], method="DOP853", rtol=1e-10, atol=1e-13,
-                    events=(released, apart, turn), max_step=0.05)
+    sol = integrate.solve_ivp(rhs, (0.0, 100.0), [0.0, 1.0], method="DOP853", rtol=1e-10,
+                              atol=1e-13, events=(released, apart, turn), max_step=0.05)
     ends = [te[0] for te in sol.t_events[:2] if len(te)]
     if not ends:
         raise RuntimeError("the single-collision ODE did not end")
@@ -85,7 +86,7 @@ def _invert(fun, restitution: float, what: str) -> float:
         if hi > 1e4:
             raise ParameterError(f"restitution={restitution:g} is too small to reach with the "
                                  f"{what} damping")
-    return brentq(lambda c: math.log(fun(c)[0]) - target, 0.0, hi, xtol=1e-13, rtol=1e-12)
+    return optimize.brentq(lambda c: math.log(fun(c)[0]) - target, 0.0, hi, xtol=1e-13, rtol=1e-12)
 
 
 @lru_cache(maxsize=256)

@@ -5,11 +5,12 @@ from __future__ import annotations
 import math
 from functools import lru_cache
 
-from scipy.optimize import brentq
-
+from .._lazy import lazy_module
 from ..errors import ParameterError
 from ..parameters import Parameter
 from .base import COMMON, ImpactModel
+
+optimize = lazy_module("scipy.optimize")
 
 
 def cutoff_contact_time(zeta: float, omega0: float) -> float:
@@ -49,7 +50,7 @@ def damping_ratio_for_restitution(restitution: float) -> float:
         hi *= 2.0
         if hi > 1e8:
             raise ParameterError(f"restitution={restitution:g} is too small to reach")
-    return brentq(lambda z: math.log(cutoff_restitution(z)) - target, 0.0, hi, xtol=1e-15,
+    return optimize.brentq(lambda z: math.log(cutoff_restitution(z)) - target, 0.0, hi, xtol=1e-15,
                   rtol=1e-14)
 
 

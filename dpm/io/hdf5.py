@@ -13,8 +13,11 @@ import time as _time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import h5py
 import numpy as np
+
+from .._lazy import lazy_module
+
+h5py = lazy_module("h5py")
 
 if TYPE_CHECKING:
     from ..simulation import Simulation

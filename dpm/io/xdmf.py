@@ -4,7 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import h5py
+from .._lazy import lazy_module
+
+h5py = lazy_module("h5py")
+
 
 #: attribute name -> (width, HDF5 number type, precision)
 _ATTRS = {

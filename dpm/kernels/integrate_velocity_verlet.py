@@ -36,6 +36,26 @@ def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia
 
 
 @inline_jit
+def pre_force_sphere(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, vf, wf,
+                     aux):
+    """:func:`pre_force_body` for a single sphere whose orientation is not tracked: the
+    same half kicks and drift, bit for bit, without the quaternion update (no force depends
+    on a sphere's orientation; LIGGGHTS' ``nve/sphere`` does the same)."""
+    h = 0.5 * dt
+    im = invmass[i]
+    for d in range(3):
+        dv = h * force[i, d] * im
+        vel[i, d] += dv
+        pos[i, d] += dt * vel[i, d]
+        vf[i, d] = vel[i, d] + dv
+    i0 = invinertia[i, 0]
+    for d in range(3):
+        dw = h * torque[i, d] * i0
+        angvel[i, d] += dw
+        wf[i, d] = angvel[i, d] + dw
+
+
+@inline_jit
 def post_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, aux):
     """Second half kick."""
     h = 0.5 * dt

@@ -2,24 +2,29 @@
 
 Order of a step (:func:`run_steps`):
 
-1. ``pre_force_body``  integrator part before the forces (e.g. half kick + drift)
+1. ``pre_force_body``  integrator part before the forces (e.g. half kick + drift), or
+   ``pre_force_sphere`` for single spheres whose orientation is not tracked
 2. element world positions from body position and quaternion (skipped when every body is
    one sphere: the element positions are then the body positions)
 3. neighbour lists rebuilt when an element moved more than skin/2 (history merged)
-4. forces, in two passes so that no two threads write the same row and the sums do not
-   depend on the number of threads:
-   a. per element (parallel): each pair of its half list and each plane of its wall list;
-      the force and both torques of a touching pair go to that pair's row of ``nl_f``
-   b. per body (parallel): gravity plus the rows of its elements' pairs, in a fixed order
-      (pairs where the element is first, then the transposed pairs, then planes)
-   c. plane reactions summed over the wall list
+4. forces, so that no two threads write the same row and every sum adds the same terms in
+   the same order whatever the number of threads, in one of two forms (``FUSED``, a
+   constant of the scene):
+   - every body a single sphere: :func:`fused_pass`, one chunk of elements per thread,
+     each pair's force added to both bodies as it is computed;
+   - otherwise two passes: a. per element (parallel, :func:`contact_pass`): each pair of
+     its half list and each entry of its boundary list; the force and both torques of a
+     touching pair go to that pair's row of ``nl_f``; b. per body (parallel,
+     :func:`sum_pass`): gravity plus the rows of its elements (own pairs, boundary
+     entries, then the pairs where it is the partner, last owner first);
+   then boundary reactions summed over the boundary list
 5. ``post_force_body`` integrator part after the forces (e.g. second half kick), fused
-   into the loop of pass b
+   into the last per-body loop of step 4
 
 :mod:`dpm.plan` copies this module for each scene with the block between the
 ``bindings`` markers rewritten: the contact laws the scene uses become ``law_0``,
-``law_1``, ... and the integrator's ``pre_force_body``/``post_force_body`` are imported, so each
-scene compiles (once, cached) a step that contains only what it needs.
+``law_1``, ... and the integrator's ``pre_force_body``/``post_force_body`` are imported, so
+each scene compiles (once, cached) a step that contains only what it needs.
 
 Diagnostics (``diag``): [0] status (0 ok, 1 pair list overflow, 2 NaN, 3 overlap
 beyond the limit, 4 wall list overflow), [1] steps done, [2] rebuilds, [3] pairs needed,
@@ -45,12 +50,13 @@ from .rolling import rolling_torque
 # --- bindings begin (dpm.plan rewrites this block) ---
 from .law_linear import linear_spring_dashpot as law_0
 from .law_hertz_mindlin import hertz_mindlin as law_1
-from .integrate_velocity_verlet import pre_force_body, post_force_body
+from .integrate_velocity_verlet import pre_force_body, pre_force_sphere, post_force_body
 from .boundary_geometry import plane_distance
 
 HAS_TRIANGLES = False
 HAS_JOINTS = False
 PERIODIC = False
+FUSED = False
 
 
 @inline_jit
@@ -94,14 +100,20 @@ def update_element_positions(b_pos, b_quat, b_estart, e_offset, e_pos):
 
 
 @pjit
-def begin_step(dt, update_elements, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
-               b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_offset, e_pos, e_ref, e_d2):
+def begin_step(dt, update_elements, spin_only, b_pos, b_vel, b_quat, b_angvel, b_force,
+               b_torque, b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_offset, e_pos,
+               e_ref, e_d2):
     """Steps 1-2 per body: integrator pre-force part (which also sets the velocities the
     forces are evaluated with, b_vf and b_wf), element positions, and each element's squared
-    displacement since the last rebuild (e_d2)."""
+    displacement since the last rebuild (e_d2). ``spin_only``: every body is a single
+    sphere whose orientation is not tracked (the integrator's ``pre_force_sphere``)."""
     for b in prange(b_pos.shape[0]):
-        pre_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
-                       b_invinertia, dt, b_vf, b_wf, b_aux)
+        if spin_only:
+            pre_force_sphere(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
+                             b_invinertia, dt, b_vf, b_wf, b_aux)
+        else:
+            pre_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
+                           b_invinertia, dt, b_vf, b_wf, b_aux)
         if update_elements:
             place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos)
         for e in range(b_estart[b], b_estart[b + 1]):
@@ -170,9 +182,9 @@ def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_in
     """Contact force of listed pair ``kk`` (element i at xi, yi, zi with radius ri, body bi,
     material mi; partner element j).
 
-    Returns (state, overlap / smaller radius, body of j, F on i, torque on body(i), torque
-    on body(j)); state 1 touching, 0 not touching, 2 it stopped touching in this call (its
-    history was cleared; the caller clears its force row).
+    Returns (state, overlap, smaller radius, F on i, torque on body(i), torque on body(j));
+    state 1 touching, 0 not touching, 2 it stopped touching in this call (its history was
+    cleared; the caller clears its force row).
     """
     dx = xi - e_pos[j, 0]
     dy = yi - e_pos[j, 1]
@@ -196,7 +208,7 @@ def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_in
                 nl_hist[kk, c] = 0.0
             nl_active[kk] = 0
             state = 2
-        return state, 0.0, bj, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        return state, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     nl_active[kk] = 1
     dist = math.sqrt(d2)
     inv = 1.0 / dist
@@ -204,7 +216,6 @@ def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_in
     ny = dy * inv
     nz = dz * inv
     delta = rs - dist
-    ratio = delta / min(ri, rj)
     # contact point: middle of the overlap, on the line of centres
     a = ri - 0.5 * delta
     cx = xi - a * nx
@@ -257,7 +268,7 @@ def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_in
         tjx -= rx
         tjy -= ry
         tjz -= rz
-    return 1, ratio, bj, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz
+    return 1, delta, min(ri, rj), fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz
 
 
 @inline_jit
@@ -388,14 +399,14 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
         worst = 0.0
         count = 0
         for kk in range(nl_start[i], nl_start[i + 1]):
-            state, ratio, _, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz = pair_contact(
+            state, delta, rmin, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz = pair_contact(
                 kk, nl_j[kk], xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_invmass,
                 e_owner, e_radius, e_mat, e_pos, nl_hist, nl_active, pair_model,
                 pair_params, period)
             if state == 1:
                 count += 1
-                if ratio > worst:
-                    worst = ratio
+                if delta > worst * rmin:  # (a division only for a new largest)
+                    worst = delta / rmin
             elif state == 2:
                 for c in range(9):
                     nl_f[kk, c] = 0.0
@@ -419,35 +430,69 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
         e_count[i] = count + wcount
 
 
+@jit
+def chunk_bounds(nchunks, nl_start):
+    """Bounds of ``nchunks`` contiguous element ranges holding about equal numbers of
+    listed pairs (a bisection per bound; balancing by touching contacts as well, an O(n)
+    pass per step, gave no faster step on box_settle)."""
+    n = nl_start.shape[0] - 1
+    bounds = np.empty(nchunks + 1, np.int64)
+    bounds[0] = 0
+    bounds[nchunks] = n
+    for c in range(1, nchunks):
+        target = (nl_start[n] * c) // nchunks
+        lo = bounds[c - 1]
+        hi = n
+        while lo < hi:  # first element whose pairs start at or after the target
+            mid = (lo + hi) // 2
+            if nl_start[mid] < target:
+                lo = mid + 1
+            else:
+                hi = mid
+        bounds[c] = lo
+    return bounds
+
+
 @pjit
-def fused_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
-               b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux, e_owner, e_radius, e_mat,
-               e_pos, nl_start, nl_j, nl_hist, nl_active, wl_start, wl_w, wl_hist, wl_active,
-               wl_f, wl_tag, bnd, pair_model, pair_params, e_worst, e_count):
-    """Passes a and b in one serial loop, for one thread and scenes whose bodies are all
-    single spheres (element i is body i): each pair's force goes straight to both bodies'
-    sums, as in LIGGGHTS, with no force rows written or read back.
+def fused_pass(dt, integrate, nchunks, gravity, b_pos, b_vel, b_quat, b_angvel, b_force,
+               b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux, e_owner, e_radius,
+               e_mat, e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair,
+               wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model, pair_params,
+               e_worst, e_count):
+    """Passes a and b fused, for scenes whose bodies are all single spheres (element i is
+    body i): each pair's force goes straight to both bodies' sums, as in LIGGGHTS, instead
+    of through a force row.
 
-    The sums are bit for bit those of :func:`sum_pass`: elements are visited from the last
-    to the first, so that a body's own pairs (partner j > i, already visited) and its
-    boundary rows are added first, onto gravity, and then the pairs where it is the partner
-    arrive from ever smaller i, which is the order in which :func:`sum_pass` adds them.
-    Then (if ``integrate``) the integrator's post-force part, body by body.
+    The elements are cut into ``nchunks`` contiguous ranges of about equal numbers of
+    pairs (:func:`chunk_bounds`, one per thread), each swept
+    backwards, last element first. A pair whose partner j lies in a later chunk
+    writes its force row instead (``nl_f``: F on i, torque on i, torque on j); a second
+    loop adds those rows to their partners, then (if ``integrate``) runs the integrator's
+    post-force part body by body.
 
-    The serial loop sits inside a one-iteration ``prange``: compiled as the body of a
-    parallel loop it runs 5x faster than the same loop in a plain ``@jit`` function (5.2 ms
-    against 1.0 ms per call on the settled box_settle packing, numba 0.68; a ``parallel``
-    function without the ``prange`` took 1.2 ms). The same holds for loops that call the
-    integrator's per-body parts (velocity Verlet's second half kick: 240 us serial against
-    32 us as a ``prange`` for 10,000 bodies, one thread): LLVM optimises the body of a
-    parallel loop, compiled as a function of its own, far better here.
+    The sums are bit for bit those of :func:`sum_pass`, for any ``nchunks``: a body's own
+    pairs (partner j > i) and its boundary rows are added first, onto gravity, because
+    within a chunk j > i was visited before i; then the pairs where it is the partner
+    arrive from ever smaller i: first from its own chunk during the sweep, then, in the
+    second loop, from the earlier chunks, again from the largest i down. That is the order
+    in which :func:`sum_pass` adds them, so the result does not depend on the number of
+    threads.
+
+    The sweeps sit inside ``prange`` loops even for one chunk: compiled as the body of a
+    parallel loop, the serial sweep runs 5x faster than the same loop in a plain ``@jit``
+    function (1.0 ms against 5.2 ms per call on the settled box_settle packing, numba
+    0.68); the same holds for loops that call the integrator's per-body parts (velocity
+    Verlet's second half kick: 32 us against 240 us for 10,000 bodies).
     """
     period = bnd[14]
     g0 = gravity[0]
     g1 = gravity[1]
     g2 = gravity[2]
-    for _serial in prange(1):  # one iteration: see the docstring
-        for i in range(e_pos.shape[0] - 1, -1, -1):
+    bounds = chunk_bounds(nchunks, nl_start)
+    for c in prange(nchunks):
+        lo = bounds[c]
+        hi = bounds[c + 1]
+        for i in range(hi - 1, lo - 1, -1):
             xi = e_pos[i, 0]
             yi = e_pos[i, 1]
             zi = e_pos[i, 2]
@@ -464,26 +509,35 @@ def fused_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, 
             count = 0
             for kk in range(nl_start[i], nl_start[i + 1]):
                 j = nl_j[kk]
-                state, ratio, _, px, py, pz, tix, tiy, tiz, tjx, tjy, tjz = pair_contact(
+                state, delta, rmin, px, py, pz, tix, tiy, tiz, tjx, tjy, tjz = pair_contact(
                     kk, j, xi, yi, zi, ri, i, mi, dt, b_pos, b_vf, b_wf, b_invmass, e_owner,
-                    e_radius, e_mat, e_pos, nl_hist, nl_active, pair_model, pair_params, period)
+                    e_radius, e_mat, e_pos, nl_hist, nl_active, pair_model, pair_params,
+                    period)
                 if state != 1:
                     continue
                 count += 1
-                if ratio > worst:
-                    worst = ratio
+                if delta > worst * rmin:  # (a division only for a new largest)
+                    worst = delta / rmin
                 fx += px
                 fy += py
                 fz += pz
                 tx += tix
                 ty += tiy
                 tz += tiz
-                b_force[j, 0] -= px
-                b_force[j, 1] -= py
-                b_force[j, 2] -= pz
-                b_torque[j, 0] += tjx
-                b_torque[j, 1] += tjy
-                b_torque[j, 2] += tjz
+                if j < hi:
+                    b_force[j, 0] -= px
+                    b_force[j, 1] -= py
+                    b_force[j, 2] -= pz
+                    b_torque[j, 0] += tjx
+                    b_torque[j, 1] += tjy
+                    b_torque[j, 2] += tjz
+                else:  # j belongs to a later chunk: its sweep may be running
+                    nl_f[kk, 0] = px
+                    nl_f[kk, 1] = py
+                    nl_f[kk, 2] = pz
+                    nl_f[kk, 6] = tjx
+                    nl_f[kk, 7] = tjy
+                    nl_f[kk, 8] = tjz
             wcount, wworst = boundary_contacts(i, xi, yi, zi, ri, i, mi, dt, b_pos, b_vf, b_wf,
                                                b_mass, b_invmass, wl_start, wl_w, wl_hist,
                                                wl_active, wl_f, wl_tag, bnd, pair_model,
@@ -504,10 +558,24 @@ def fused_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, 
             b_torque[i, 2] = tz
             e_worst[i] = max(worst, wworst)
             e_count[i] = count + wcount
-    if integrate:
-        for b in prange(b_pos.shape[0]):  # (a serial loop here ran 7x slower, as above)
-            post_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
-                            b_invinertia, dt, b_aux)
+    for c in prange(nchunks):
+        lo = bounds[c]
+        hi = bounds[c + 1]
+        first = nl_start[lo]  # pairs before it belong to earlier chunks
+        for j in range(lo, hi):
+            if lo > 0:
+                for t in range(t_start[j + 1] - 1, t_start[j] - 1, -1):
+                    kk = t_pair[t]
+                    if kk < first and nl_active[kk]:
+                        b_force[j, 0] -= nl_f[kk, 0]
+                        b_force[j, 1] -= nl_f[kk, 1]
+                        b_force[j, 2] -= nl_f[kk, 2]
+                        b_torque[j, 0] += nl_f[kk, 6]
+                        b_torque[j, 1] += nl_f[kk, 7]
+                        b_torque[j, 2] += nl_f[kk, 8]
+            if integrate:
+                post_force_body(j, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
+                                b_invmass, b_invinertia, dt, b_aux)
 
 
 @pjit
@@ -581,11 +649,12 @@ def compute_forces(dt, integrate, fused, gravity, b_pos, b_vel, b_quat, b_angvel
     With ``integrate`` False and ``dt`` = 0 it re-evaluates the forces of the current state
     without advancing the contact history.
     """
-    if fused:
-        fused_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
-                   b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux, e_owner, e_radius, e_mat,
-                   e_pos, nl_start, nl_j, nl_hist, nl_active, wl_start, wl_w, wl_hist,
-                   wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst, e_count)
+    if FUSED:  # a constant of the scene: only one of the two forms is compiled
+        fused_pass(dt, integrate, fused, gravity, b_pos, b_vel, b_quat, b_angvel,
+                   b_force, b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux,
+                   e_owner, e_radius, e_mat, e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f,
+                   t_start, t_pair, wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, bnd,
+                   pair_model, pair_params, e_worst, e_count)
     else:
         contact_pass(dt, b_pos, b_vf, b_wf, b_mass, b_invmass, e_owner, e_radius, e_mat,
                      e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, wl_start, wl_w, wl_hist,
@@ -621,7 +690,7 @@ def compute_forces(dt, integrate, fused, gravity, b_pos, b_vel, b_quat, b_angvel
 
 
 @jit
-def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements, fused,
+def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements, fused, spin_only,
               b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass,
               b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner, e_offset, e_radius, e_mat, e_pos,
               e_ref, nl_start, nl_j, nl_hist, nl_active, nl_f, new_start, new_j, new_hist,
@@ -644,11 +713,11 @@ def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements, fused,
             for b in range(f_cur.shape[0]):
                 for c in range(f_cur.shape[1]):
                     f_cur[b, c] = f_table[row, b, c]
-        begin_step(dt, update_elements, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
-                   b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_offset, e_pos, e_ref,
-                   e_worst)
-        finish_step(dt, gravity, skin, max_overlap, update_elements, fused, b_pos, b_vel,
-                    b_quat,
+        begin_step(dt, update_elements, spin_only, b_pos, b_vel, b_quat, b_angvel, b_force,
+                   b_torque, b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_offset,
+                   e_pos, e_ref, e_worst)
+        finish_step(dt, gravity, skin, max_overlap, update_elements, fused, spin_only, b_pos,
+                    b_vel, b_quat,
                     b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux,
                     b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref, nl_start, nl_j,
                     nl_hist, nl_active, nl_f, new_start, new_j, new_hist, new_active, t_start,
@@ -693,9 +762,9 @@ def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_a
 
 
 @jit
-def finish_step(dt, gravity, skin, max_overlap, update_elements, fused, b_pos, b_vel,
-                b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf,
-                b_aux,
+def finish_step(dt, gravity, skin, max_overlap, update_elements, fused, spin_only, b_pos,
+                b_vel, b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia,
+                b_vf, b_wf, b_aux,
                 b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref, nl_start, nl_j, nl_hist,
                 nl_active, nl_f, new_start, new_j, new_hist, new_active, t_start, t_pair,
                 wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, wnew_start, wnew_w, wnew_hist,
@@ -715,7 +784,7 @@ def finish_step(dt, gravity, skin, max_overlap, update_elements, fused, b_pos, b
                 wl_hist, wl_active, wnew_start, wnew_w, wnew_hist, wnew_active, bnd, diag)
         if diag[0] != STATUS_OK:
             return
-        if not fused:  # (fused_pass neither writes nor reads the pair rows)
+        if not FUSED:  # (fused_pass reads the rows of pairs across chunks only)
             clear_rows(nl_f, nl_start[e_pos.shape[0]])
         clear_rows(wl_f, wl_start[e_pos.shape[0]])
     # (a run-time True: a literal would compile compute_forces a second time)
@@ -812,6 +881,22 @@ def build_boundary_list(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_
     copy_back(count, new_start, new_w, new_hist, new_active, wl_start, wl_w, wl_hist,
               wl_active)
     return count
+
+
+@jit
+def pair_overlaps(e_pos, e_radius, nl_start, nl_j, period):
+    """Overlap / smaller radius of each listed pair (negative: apart), nearest periodic
+    image; for the initial-overlap check (one float per pair, no temporaries)."""
+    out = np.empty(nl_start[e_pos.shape[0]])
+    for i in range(e_pos.shape[0]):
+        for k in range(nl_start[i], nl_start[i + 1]):
+            j = nl_j[k]
+            dx = minimum_image(e_pos[i, 0] - e_pos[j, 0], period[3])
+            dy = minimum_image(e_pos[i, 1] - e_pos[j, 1], period[4])
+            dz = minimum_image(e_pos[i, 2] - e_pos[j, 2], period[5])
+            d = math.sqrt(dx * dx + dy * dy + dz * dz)
+            out[k] = (e_radius[i] + e_radius[j] - d) / min(e_radius[i], e_radius[j])
+    return out
 
 
 @jit

@@ -33,10 +33,10 @@ def spring_coulomb(kt, ct, mu, fn, vtx, vty, vtz, nx, ny, nz, dt, hist, k):
     ftx = -kt * sx - ct * vtx
     fty = -kt * sy - ct * vty
     ftz = -kt * sz - ct * vtz
-    ft = math.sqrt(ftx * ftx + fty * fty + ftz * ftz)
+    ft2 = ftx * ftx + fty * fty + ftz * ftz
     fmax = mu * max(fn, 0.0)
-    if ft > fmax:
-        r = fmax / ft
+    if ft2 > fmax * fmax:  # (squares: a sticking contact needs no square root)
+        r = fmax / math.sqrt(ft2)
         ftx *= r
         fty *= r
         ftz *= r

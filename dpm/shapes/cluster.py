@@ -43,14 +43,16 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
-import trimesh
-from scipy.ndimage import distance_transform_edt
-from scipy.spatial import cKDTree
 
+from .._lazy import lazy_module
 from ..errors import ParameterError
 from ..parameters import Parameter
 from .base import BodyBatch, Shape
 from .geometry import principal_frame, quaternion_from_matrix
+
+trimesh = lazy_module("trimesh")
+ndimage = lazy_module("scipy.ndimage")
+spatial = lazy_module("scipy.spatial")
 
 #: surface tolerance at resolution -> 0 and at resolution 1, as fractions of the largest
 #: inscribed radius R_in (geometric interpolation in between)
@@ -197,7 +199,7 @@ class ClusterShape(Shape):
             inside = self.inside_grid(*axes)
             if not inside.any():
                 raise ParameterError(f"{self.call}: the solid is too thin for the voxel grid")
-            edt = distance_transform_edt(inside, sampling=h).ravel()
+            edt = ndimage.distance_transform_edt(inside, sampling=h).ravel()
             top = np.argsort(-edt, kind="stable")[:16]
             idx = np.unravel_index(top, inside.shape)
             pts = np.column_stack([axes[0][idx[0]], axes[1][idx[1]], axes[2][idx[2]]])
@@ -284,7 +286,7 @@ def generate_cluster(shape: ClusterShape, resolution: float) -> Cluster:
     r_in, deepest = shape.deepest_point()
     tol, r_floor = tolerances(r_in, resolution)
     pts, normals = shape.surface_samples(surface_sample_count(shape, tol))
-    tree = cKDTree(pts)
+    tree = spatial.cKDTree(pts)
     centres: list[np.ndarray] = []
     radii: list[float] = []
     dist = np.full(len(pts), np.inf)
@@ -398,7 +400,7 @@ def _fill_interior(shape: ClusterShape, r_in: float, threshold: float,
     h = max(r_in / 10.0, (float(np.prod(hi - lo)) / 200_000) ** (1.0 / 3.0))
     xs, ys, zs = _grid_axes(lo, hi, h, shape.grid_jitter)
     inside = shape.inside_grid(xs, ys, zs)
-    d_est = distance_transform_edt(inside, sampling=h) - 0.5 * h
+    d_est = ndimage.distance_transform_edt(inside, sampling=h) - 0.5 * h
     covered = np.zeros(inside.shape, dtype=bool)
     for c, r in zip(centres, radii, strict=True):
         _mark_ball(covered, xs, ys, zs, h, c, r)

@@ -5,12 +5,14 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import trimesh
 
+from .._lazy import lazy_module
 from ..errors import ParameterError
 from ..parameters import Parameter
 from .cluster import RESOLUTION, ClusterShape, MassProperties
 from .geometry import mesh_inside_grid, triangle_distance
+
+trimesh = lazy_module("trimesh")
 
 
 class MeshShape(ClusterShape):

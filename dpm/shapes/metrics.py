@@ -13,12 +13,14 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import trimesh
 
+from .._lazy import lazy_module
 from ..errors import ParameterError
 from .base import Shape
 from .cluster import ClusterShape
 from .sphere import Sphere
+
+trimesh = lazy_module("trimesh")
 
 #: resolutions of the table when none are given
 DEFAULT_RESOLUTIONS = (0.1, 0.3, 0.6, 1.0)

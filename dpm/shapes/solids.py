@@ -14,8 +14,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import trimesh
 
+from .._lazy import lazy_module
 from ..parameters import Parameter
 from .cluster import RESOLUTION, ClusterShape, length
 from .geometry import (
@@ -23,6 +23,8 @@ from .geometry import (
     inertia_from_second_moment,
     segment_distance_2d,
 )
+
+trimesh = lazy_module("trimesh")
 
 #: rotation taking trimesh's revolution axis z onto x: (x, y, z) -> (z, x, y)
 _Z_TO_X = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
