@@ -20,6 +20,8 @@
 All scenes use one contact law and carry far-away "sentinel" boundaries of every kind, so
 that they share one generated step module (a step module is compiled per set of boundary
 kinds, ~30-90 s each on a cold cache); the sentinels never come within reach of a particle.
+For the same reason the sphere scenes use the two-pass force sum of the clustered ones; the
+fused pass of sphere scenes is checked against it at every boundary kind by a slow test.
 """
 
 from __future__ import annotations
@@ -79,11 +81,13 @@ def sentinels(sim: dpm.Simulation, w: dpm.Material) -> None:
                      hole=2e-3, bar=1e-3, clearance_model="fixed")
 
 
-def scene(gravity=(0, 0, -G), dt=2e-6, friction=0.5, restitution=0.3, **law):
-    """(sim, particle material, wall material) with Hertz-Mindlin for both pairs."""
+def scene(gravity=(0, 0, -G), dt=2e-6, friction=0.5, restitution=0.3, fused=False, **law):
+    """(sim, particle material, wall material) with Hertz-Mindlin for both pairs; the
+    two-pass force sum unless ``fused`` (see the module docstring)."""
     a = dpm.Material("glass", **GLASS)
     w = dpm.Material("steel", **STEEL)
     sim = dpm.Simulation(dt=dt, gravity=gravity, dt_check="warn")
+    sim._two_pass = not fused
     sim.contact(a, a, model="hertz_mindlin", restitution=restitution, friction=friction, **law)
     sim.contact(a, w, model="hertz_mindlin", restitution=restitution, friction=friction, **law)
     return sim, a, w
@@ -232,12 +236,12 @@ def pinwheel_floor(n: int, c: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def force_history(floor: str, x0, v, spin: float, steps: int,
-                  land: int | None = None) -> tuple[np.ndarray, float]:
+                  land: int | None = None, fused: bool = False) -> tuple[np.ndarray, float]:
     """Boundary force after every step of a sphere started at x0 with velocity v and spin
     ``spin`` times the rolling spin (z x v) / r. With ``land``, the sphere is moved sideways
     after step ``land`` so that the next step puts its centre 1e-9 m on the far side of the
     edge y = 0 (the same shift in both runs)."""
-    sim, a, w = scene()
+    sim, a, w = scene(fused=fused)
     if floor == "plane":
         bd = sim.add_boundary("plane", material=w)
     else:
@@ -477,11 +481,12 @@ def test_ball_rolls_through_tube_bend_tube_without_leaking():
     assert worst < R_P - R_BALL + 1e-5
 
 
-def joined_pipe_history(split: bool, kind: str, steps: int = 1500) -> tuple[np.ndarray, float]:
+def joined_pipe_history(split: bool, kind: str, steps: int = 1500,
+                        fused: bool = False) -> tuple[np.ndarray, float]:
     """Force on the pipe (all pieces) after every step of a ball rolling across the place
     where a split pipe is joined: a straight tube joined at x = 0.02, or a bend joined at
     angle 0.5 rad; the unsplit pipe is the reference."""
-    sim, a, w = scene()
+    sim, a, w = scene(fused=fused)
     if kind == "tube":
         pieces = ([(0.0, 0.02), (0.02, 0.02)] if split else [(0.0, 0.04)])
         bds = [sim.add_boundary("tube", material=w, start=(x, 0, 0), axis=(1, 0, 0), length=ln,
@@ -507,6 +512,26 @@ def joined_pipe_history(split: bool, kind: str, steps: int = 1500) -> tuple[np.n
     return out, sphere_mass(R_BALL) * G
 
 
+@pytest.mark.slow
+def test_fused_pass_matches_two_pass_at_every_boundary_kind():
+    """Sphere scenes sum forces in the fused pass; it gives the two-pass sum's numbers bit
+    for bit on a meshed floor (edge and vertex hand-overs), across a joined bend and in a
+    sieve screening (slab, plate, sieve, box: all kinds with the sentinels)."""
+    runs = {}
+    for fused in (False, True):
+        mesh, _ = force_history("mesh", *ROLLS["landing_next_to_an_edge"][:3], 500, land=300,
+                                fused=fused)
+        bend, _ = joined_pipe_history(True, "bend", 600, fused=fused)
+        sim, a, _ = sieve_scene("radius", 0.8, fused=fused)
+        sim.add_particles("sphere", material=a, radius=R_SMALL,
+                          positions=[(0.0, 0.0, 4 * R_SMALL), (HOLE, 0.0, 7 * R_SMALL)])
+        sim.run(steps=3000, progress=False)
+        assert sim._module.FUSED == fused
+        runs[fused] = (mesh, bend, sim.bodies.position.copy(), sim.boundaries[0].force.copy())
+    for x, y in zip(runs[False], runs[True], strict=True):
+        np.testing.assert_array_equal(x, y)
+
+
 @pytest.mark.parametrize("kind", ["tube", "bend"])
 def test_pipe_joint_feels_like_one_piece(kind):
     """A ball rolling across the joint of two tube (or bend) pieces feels the force history
@@ -528,8 +553,8 @@ R_SMALL, R_LARGE = 1.2e-3, 2.6e-3
 AMP, FREQ = 1e-3, 25.0
 
 
-def sieve_scene(model: str, zeta: float):
-    sim, a, w = scene(friction=0.3, restitution=0.5)
+def sieve_scene(model: str, zeta: float, fused: bool = False):
+    sim, a, w = scene(friction=0.3, restitution=0.5, fused=fused)
     sv = sim.add_boundary("sieve", material=w, center=(0, 0, 0), half_extents=(HALF, HALF),
                           hole=HOLE, bar=BAR, clearance_model=model, zeta=zeta,
                           motion=dpm.Oscillation(amplitude=(0, 0, AMP), frequency=FREQ))
