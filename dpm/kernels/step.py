@@ -177,6 +177,13 @@ def joint_hand_over(q0, q1, xi, yi, zi, ri, wl_w, wl_active, wl_hist, w_kind, w_
 
 
 @inline_jit
+def add_row(rows, q, fx, fy, fz, tx, ty, tz):
+    """The sums plus force row q's force (columns 0-2) and torque on its body (3-5)."""
+    return (fx + rows[q, 0], fy + rows[q, 1], fz + rows[q, 2], tx + rows[q, 3],
+            ty + rows[q, 4], tz + rows[q, 5])
+
+
+@inline_jit
 def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_invmass, e_owner,
                  e_radius, e_mat, e_pos, nl_hist, nl_active, pair_model, pair_params, period):
     """Contact force of listed pair ``kk`` (element i at xi, yi, zi with radius ri, body bi,
@@ -544,12 +551,7 @@ def fused_pass(dt, integrate, nchunks, gravity, b_pos, b_vel, b_quat, b_angvel, 
                                                pair_params)
             if wcount > 0:
                 for q in range(wl_start[i], wl_start[i + 1]):
-                    fx += wl_f[q, 0]
-                    fy += wl_f[q, 1]
-                    fz += wl_f[q, 2]
-                    tx += wl_f[q, 3]
-                    ty += wl_f[q, 4]
-                    tz += wl_f[q, 5]
+                    fx, fy, fz, tx, ty, tz = add_row(wl_f, q, fx, fy, fz, tx, ty, tz)
             b_force[i, 0] = fx
             b_force[i, 1] = fy
             b_force[i, 2] = fz
@@ -600,19 +602,9 @@ def sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_
             # and at every rebuild), so they are added without a test: no mispredicted
             # branches where touching and non-touching pairs alternate
             for kk in range(nl_start[e], nl_start[e + 1] if own else nl_start[e]):
-                fx += nl_f[kk, 0]
-                fy += nl_f[kk, 1]
-                fz += nl_f[kk, 2]
-                tx += nl_f[kk, 3]
-                ty += nl_f[kk, 4]
-                tz += nl_f[kk, 5]
+                fx, fy, fz, tx, ty, tz = add_row(nl_f, kk, fx, fy, fz, tx, ty, tz)
             for q in range(wl_start[e], wl_start[e + 1] if own else wl_start[e]):
-                fx += wl_f[q, 0]
-                fy += wl_f[q, 1]
-                fz += wl_f[q, 2]
-                tx += wl_f[q, 3]
-                ty += wl_f[q, 4]
-                tz += wl_f[q, 5]
+                fx, fy, fz, tx, ty, tz = add_row(wl_f, q, fx, fy, fz, tx, ty, tz)
             # the pairs where e is the partner, from the last owner to the first (the
             # order of fused_pass, so that both give the same sums bit for bit)
             for t in range(t_start[e + 1] - 1, t_start[e] - 1, -1):
