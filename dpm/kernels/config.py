@@ -30,6 +30,42 @@ inline_jit = njit(**JIT, inline="always")
 #: the result does not depend on the number of threads
 pjit = njit(**JIT, parallel=True)
 
+
+
+@inline_jit
+def pair_row(pair_params, a, b):
+    """The constants of material pair (a, b) as a tuple of N_PAIR_PARAMS floats (what the
+    contact laws and the rolling resistance receive as ``p``).
+
+    A tuple, not the row view ``pair_params[a, b]``: numba reference-counts an array view
+    with two atomic operations (and spills every live float register around those calls),
+    once per touching pair; that was 3.5 % of box_settle's settled step in the atomics
+    alone.
+    """
+    return (pair_params[a, b, 0], pair_params[a, b, 1], pair_params[a, b, 2],
+            pair_params[a, b, 3], pair_params[a, b, 4], pair_params[a, b, 5],
+            pair_params[a, b, 6], pair_params[a, b, 7])
+
+
+assert N_PAIR_PARAMS == 8  # pair_row spells the slots out
+
+
+@inline_jit
+def row18(a, k):
+    """Row ``k`` of an (n, 18) array as a tuple (a boundary frame row; see
+    :func:`pair_row` for why a tuple and not the view ``a[k]``)."""
+    return (a[k, 0], a[k, 1], a[k, 2], a[k, 3], a[k, 4], a[k, 5], a[k, 6], a[k, 7], a[k, 8],
+            a[k, 9], a[k, 10], a[k, 11], a[k, 12], a[k, 13], a[k, 14], a[k, 15], a[k, 16],
+            a[k, 17])
+
+
+@inline_jit
+def row20(a, k):
+    """Row ``k`` of an (n, 20) array as a tuple (a boundary primitive's geometry)."""
+    return (a[k, 0], a[k, 1], a[k, 2], a[k, 3], a[k, 4], a[k, 5], a[k, 6], a[k, 7], a[k, 8],
+            a[k, 9], a[k, 10], a[k, 11], a[k, 12], a[k, 13], a[k, 14], a[k, 15], a[k, 16],
+            a[k, 17], a[k, 18], a[k, 19])
+
 #: the same two for the functions of the generated step modules (cached on disk)
 step_jit = njit(**STEP_JIT)
 step_pjit = njit(**STEP_JIT, parallel=True)

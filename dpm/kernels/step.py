@@ -38,7 +38,8 @@ import numpy as np
 
 from numba import prange
 
-from .config import inline_jit, step_jit as jit, step_pjit as pjit
+from .config import inline_jit, pair_row, row18, row20, step_jit as jit
+from .config import step_pjit as pjit
 from .boundary_geometry import AXI, JOINED, TORUS, TRIANGLE, in_range, touching
 from .boundary_search import boundary_motion_since_rebuild, to_local, to_world
 from .mesh_contact import resolve_triangle_contacts
@@ -250,7 +251,7 @@ def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_in
     vty = vy - vn * ny
     vtz = vz - vn * nz
     mj = e_mat[j]
-    p = pair_params[mi, mj]
+    p = pair_row(pair_params, mi, mj)
     reff = ri * rj / rs
     meff = 1.0 / ims
     fn, ftx, fty, ftz = pair_force(pair_model[mi, mj], p, delta, -vn, vtx, vty, vtz,
@@ -280,13 +281,14 @@ def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_in
 
 @inline_jit
 def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_mass,
-                      b_invmass, wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, bnd,
-                      pair_model, pair_params):
+                      b_invmass, wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, w_kind,
+                      w_par, w_owner, w_mat, w_ids, f_cur, pair_model, pair_params):
     """Element-boundary contacts of element i, each in its boundary's frame, stored per
     row: wl_f[q] = (F, torque on the body, torque on the boundary about its frame origin);
     rows of entries that do not touch are zeroed. Returns (touching entries, largest
-    overlap / radius)."""
-    w_kind, w_par, w_owner, w_mat, w_ids, f_cur = bnd[0], bnd[1], bnd[2], bnd[3], bnd[4], bnd[5]
+    overlap / radius). The boundary arrays come unpacked from ``bnd`` (the caller unpacks
+    them once: taking an array out of a tuple costs numba a reference count, two atomic
+    operations, each time)."""
     nh = wl_hist.shape[1]
     count = 0
     worst = 0.0
@@ -310,9 +312,9 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
     for q in range(q0, q1):
         w = wl_w[q]
         kind = w_kind[w]
-        f = f_cur[w_owner[w]]
+        f = row18(f_cur, w_owner[w])  # (tuples: no reference counts per entry)
         lx, ly, lz = to_local(f, xi, yi, zi)
-        dist, lnx, lny, lnz, feature = closest(kind, w_par[w], lx, ly, lz, ri)
+        dist, lnx, lny, lnz, feature = closest(kind, row20(w_par, w), lx, ly, lz, ri)
         if (not touching(kind, dist, ri) or (kind == TRIANGLE and wl_tag[q] < 0)
                 or feature == JOINED or b_invmass[bi] == 0.0):
             if wl_active[q]:
@@ -350,7 +352,7 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
         vty = vy - vn * ny
         vtz = vz - vn * nz
         mw = w_mat[w]
-        p = pair_params[mi, mw]
+        p = pair_row(pair_params, mi, mw)
         fn, ftx, fty, ftz = pair_force(pair_model[mi, mw], p, delta, -vn, vtx, vty, vtz,
                                        nx, ny, nz, b_mass[bi], ri, dt, wl_hist, q)
         fx = fn * nx + ftx
@@ -396,6 +398,7 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
     e_worst[i], e_count[i]: largest overlap / radius and number of touching contacts.
     """
     period = bnd[14]
+    w_kind, w_par, w_owner, w_mat, w_ids, f_cur = bnd[0], bnd[1], bnd[2], bnd[3], bnd[4], bnd[5]
     for i in prange(e_pos.shape[0]):
         xi = e_pos[i, 0]
         yi = e_pos[i, 1]
@@ -431,7 +434,8 @@ def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radiu
             nl_f[kk, 8] = tjz
         wcount, wworst = boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel,
                                            b_angvel, b_mass, b_invmass, wl_start, wl_w,
-                                           wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model,
+                                           wl_hist, wl_active, wl_f, wl_tag, w_kind, w_par,
+                                           w_owner, w_mat, w_ids, f_cur, pair_model,
                                            pair_params)
         e_worst[i] = max(worst, wworst)
         e_count[i] = count + wcount
@@ -492,6 +496,7 @@ def fused_pass(dt, integrate, nchunks, gravity, b_pos, b_vel, b_quat, b_angvel, 
     Verlet's second half kick: 32 us against 240 us for 10,000 bodies).
     """
     period = bnd[14]
+    w_kind, w_par, w_owner, w_mat, w_ids, f_cur = bnd[0], bnd[1], bnd[2], bnd[3], bnd[4], bnd[5]
     g0 = gravity[0]
     g1 = gravity[1]
     g2 = gravity[2]
@@ -547,7 +552,8 @@ def fused_pass(dt, integrate, nchunks, gravity, b_pos, b_vel, b_quat, b_angvel, 
                     nl_f[kk, 8] = tjz
             wcount, wworst = boundary_contacts(i, xi, yi, zi, ri, i, mi, dt, b_pos, b_vf, b_wf,
                                                b_mass, b_invmass, wl_start, wl_w, wl_hist,
-                                               wl_active, wl_f, wl_tag, bnd, pair_model,
+                                               wl_active, wl_f, wl_tag, w_kind, w_par,
+                                               w_owner, w_mat, w_ids, f_cur, pair_model,
                                                pair_params)
             if wcount > 0:
                 for q in range(wl_start[i], wl_start[i + 1]):
