@@ -63,9 +63,8 @@ def main() -> None:
         sim._e_count), 200)
     rebuild = timed(lambda: m.rebuild(
         sim.skin, e.owner, e.radius, e.position, e.reference, c.start, c.key, c.history,
-        c.active, c.new_start, c.new_key, c.new_history, c.new_active, c.t_start, c.t_pair,
-        wc.start, wc.key, wc.history, wc.active, wc.new_start, wc.new_key, wc.new_history,
-        wc.new_active, sim._bnd(), sim._diag), 10)
+        c.active, c.t_start, c.t_pair, wc.start, wc.key, wc.history, wc.active, sim._bnd(),
+        sim._diag), 10)
     print(f"{a.case} box, {n} spheres, {c.count} listed pairs, {int(sim._diag[6])} touching; "
           f"us per step: step {step:.0f} | begin {begin:.0f} ({begin / n * 1e3:.0f} ns per "
           f"body) | contact {contact:.0f} | sum {summed:.0f} | one rebuild {rebuild:.0f}")

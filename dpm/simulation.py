@@ -695,10 +695,8 @@ class Simulation:
         while True:
             d[0] = STATUS_OK
             self._module.rebuild(self.skin, e.owner, e.radius, e.position, e.reference,
-                                 c.start, c.key, c.history, c.active, c.new_start, c.new_key,
-                                 c.new_history, c.new_active, c.t_start, c.t_pair, wc.start,
-                                 wc.key, wc.history, wc.active, wc.new_start, wc.new_key,
-                                 wc.new_history, wc.new_active, self._bnd(), d)
+                                 c.start, c.key, c.history, c.active, c.t_start, c.t_pair,
+                                 wc.start, wc.key, wc.history, wc.active, self._bnd(), d)
             if d[0] == STATUS_OVERFLOW:
                 c.grow(int(d[3]))
             elif d[0] == STATUS_WALL_OVERFLOW:
@@ -720,9 +718,8 @@ class Simulation:
                 e.owner,
                 e.offset, e.radius,
                 e.material, e.position, e.reference, c.start, c.key, c.history, c.active,
-                c.force, c.new_start, c.new_key, c.new_history, c.new_active, c.t_start,
-                c.t_pair, wc.start, wc.key, wc.history, wc.active, wc.force, wc.tag,
-                wc.new_start, wc.new_key, wc.new_history, wc.new_active, self._bnd(),
+                c.force, c.t_start, c.t_pair, wc.start, wc.key, wc.history, wc.active,
+                wc.force, wc.tag, self._bnd(),
                 self._pair_model, self._pair_params, self._e_worst, self._e_count, self._diag)
 
     def _sync_form(self) -> None:

@@ -90,8 +90,9 @@ class Elements:
 
 
 class _CsrList:
-    """A CSR list keyed per element with contact history, active flags and force rows,
-    plus the scratch buffers of the next rebuild (same sizes)."""
+    """A CSR list keyed per element with contact history, active flags and force rows.
+    A rebuild writes the new list into scratch arrays of its exact size that live only
+    while it runs (see :func:`dpm.kernels.neighbours.build_neighbour_list`)."""
 
     FORCE_WIDTH = 9
     ALWAYS_ROWS = True
@@ -119,15 +120,12 @@ class _CsrList:
             return
         keep = min(width, self.history_width)
         self.history_width = width
-        for name in ("history", "new_history"):
-            old = getattr(self, name)
-            new = np.zeros((len(old), width))
-            new[:, :keep] = old[:, :keep]
-            setattr(self, name, new)
+        new = np.zeros((len(self.history), width))
+        new[:, :keep] = self.history[:, :keep]
+        self.history = new
 
     def reset(self, n_elements: int, capacity: int) -> None:
         self.start = np.zeros(n_elements + 1, np.int64)
-        self.new_start = np.zeros(n_elements + 1, np.int64)
         self._allocate(max(int(capacity), 16))
 
     def _allocate(self, cap: int) -> None:
@@ -135,9 +133,6 @@ class _CsrList:
         self.history = np.zeros((cap, self.history_width))
         self.active = np.zeros(cap, np.uint8)
         self.force = np.zeros((cap if self.rows else 0, self.FORCE_WIDTH))
-        self.new_key = np.zeros(cap, np.int64)
-        self.new_history = np.zeros((cap, self.history_width))
-        self.new_active = np.zeros(cap, np.uint8)
 
     @property
     def capacity(self) -> int:
@@ -153,7 +148,6 @@ class _CsrList:
         if n_elements > old:
             self.start = np.concatenate([self.start, np.full(n_elements - old,
                                                              self.start[-1])])
-        self.new_start = np.zeros(n_elements + 1, np.int64)
 
     def keep_rows(self, keep: np.ndarray, new_index: np.ndarray, remap_keys: bool) -> None:
         """Drop the rows of removed elements (``keep`` False) and, if ``remap_keys``
@@ -174,7 +168,6 @@ class _CsrList:
         n_new = int(keep.sum())
         counts = np.bincount(new_index[rows[valid]], minlength=n_new)
         self.start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        self.new_start = np.zeros(n_new + 1, np.int64)
 
     def grow(self, needed: int) -> None:
         """Enlarge the buffers to hold ``needed`` entries (with headroom); keep the list."""

@@ -15,8 +15,7 @@ def _build(pos, rad, owner, skin, cap=10000, old=None):
     active = np.zeros(cap, np.uint8)
     count = neighbours.build_neighbour_list(
         pos, rad, owner, skin, start, j, hist, active, np.zeros(n + 1, np.int64),
-        np.zeros(cap, np.int64), np.zeros((cap, N_HISTORY)), np.zeros(cap, np.uint8),
-        np.zeros(n + 1, np.int64), np.zeros(cap, np.int64), np.zeros(6))
+        np.zeros(cap, np.int64), np.zeros(6))
     return count, start, j, hist
 
 

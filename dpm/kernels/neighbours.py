@@ -273,19 +273,22 @@ SLOT_SLACK = 4
 
 @jit
 def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist, nl_active,
-                         new_start, new_j, new_hist, new_active, t_start, t_pair, period):
+                         t_start, t_pair, period):
     """Rebuild the half list, merge history and flags, copy back, build the transpose.
 
     One search pass writes each element's partners into a transient slot sized by its count
     in the previous list plus ``SLOT_SLACK`` (lists change little between rebuilds); the
     slots are then copied into the exact rows. If any element outgrew its slot, the rows are
-    sized by that pass's counts and a second pass fills them.
+    sized by that pass's counts and a second pass fills them. The new list and its merged
+    history live in scratch arrays of its exact size, allocated here and freed on return
+    (numba frees each array after its last use, so the search's scratch is gone before the
+    history's is allocated); the list's own arrays are only its capacity.
 
     Returns the number of pairs found. If it exceeds the capacity nothing is changed (the
     old list and its history are intact): the caller grows the buffers and calls again.
     """
     n = e_pos.shape[0]
-    cap = new_j.shape[0]
+    cap = nl_j.shape[0]
     rmax = 0.0
     for i in range(n):
         if e_radius[i] > rmax:
@@ -297,7 +300,7 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
     slot_start[0] = 0
     for i in range(n):
         slot_start[i + 1] = slot_start[i] + (nl_start[i + 1] - nl_start[i]) + SLOT_SLACK
-    slots = np.empty(slot_start[n], np.int64)  # transient: keys only
+    slots = np.empty(slot_start[n], nl_j.dtype)  # transient: keys only
     _search(sp, so, skin, lo, width, dims, cell_start, order, counts, slot_start,
             slot_start[1:], slots, n >= 0, period)
     fits = True
@@ -305,25 +308,25 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
         if counts[i] > slot_start[i + 1] - slot_start[i]:
             fits = False
             break
+    new_start = np.empty(n + 1, np.int64)
     new_start[0] = 0
+    for i in range(n):
+        new_start[i + 1] = new_start[i] + counts[i]
+    count = new_start[n]
+    if count > cap:
+        return count
+    new_j = np.empty(count, nl_j.dtype)
     if fits:
-        for i in range(n):
-            new_start[i + 1] = new_start[i] + counts[i]
-        if new_start[n] > cap:
-            return new_start[n]
         for i in range(n):
             s0 = slot_start[i]
             d0 = new_start[i]
             for k in range(counts[i]):
                 new_j[d0 + k] = slots[s0 + k]
-    else:  # some element outgrew its slot: size the rows exactly, then fill them
-        for i in range(n):
-            new_start[i + 1] = new_start[i] + counts[i]
-        if new_start[n] > cap:
-            return new_start[n]
+    else:  # some element outgrew its slot: fill the exact rows in a second pass
         _search(sp, so, skin, lo, width, dims, cell_start, order, counts, new_start,
                 new_start[1:], new_j, n >= 0, period)
-    count = new_start[n]
+    new_hist = np.empty((count, nl_hist.shape[1]))
+    new_active = np.empty(count, np.uint8)
     _merge(nl_start, nl_j, nl_hist, nl_active, new_start, new_j, new_hist, new_active)
     _copy_back(count, new_start, new_j, new_hist, new_active, nl_start, nl_j, nl_hist,
                nl_active)

@@ -690,11 +690,10 @@ def compute_forces(dt, integrate, fused, gravity, b_pos, b_vel, b_quat, b_angvel
 @jit
 def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements, fused, spin_only,
               b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass,
-              b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner, e_offset, e_radius, e_mat, e_pos,
-              e_ref, nl_start, nl_j, nl_hist, nl_active, nl_f, new_start, new_j, new_hist,
-              new_active, t_start, t_pair, wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag,
-              wnew_start, wnew_w, wnew_hist, wnew_active, bnd, pair_model, pair_params,
-              e_worst, e_count, diag, f_table):
+              b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner, e_offset, e_radius, e_mat,
+              e_pos, e_ref, nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair, wl_start,
+              wl_w, wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst,
+              e_count, diag, f_table):
     """Advance ``nsteps`` steps; stop early with a status in ``diag[0]``.
 
     ``f_table[s]`` holds the boundary frames at the end of step s (time t + (s+1) dt) for
@@ -715,14 +714,11 @@ def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements, fused, sp
                    b_torque, b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_offset,
                    e_pos, e_ref, e_worst)
         finish_step(dt, gravity, skin, max_overlap, update_elements, fused, spin_only, b_pos,
-                    b_vel, b_quat,
-                    b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux,
-                    b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref, nl_start, nl_j,
-                    nl_hist, nl_active, nl_f, new_start, new_j, new_hist, new_active, t_start,
-                    t_pair,
-                    wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, wnew_start, wnew_w,
-                    wnew_hist, wnew_active, bnd, pair_model, pair_params, e_worst, e_count,
-                    diag)
+                    b_vel, b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia,
+                    b_vf, b_wf, b_aux, b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref,
+                    nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair, wl_start, wl_w,
+                    wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst,
+                    e_count, diag)
         if diag[0] == STATUS_OK or diag[0] == STATUS_OVERLAP:
             diag[1] = s + 1
         if diag[0] != STATUS_OK:
@@ -731,21 +727,18 @@ def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements, fused, sp
 
 @jit
 def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_active,
-            new_start, new_j, new_hist, new_active, t_start, t_pair, wl_start, wl_w, wl_hist,
-            wl_active, wnew_start, wnew_w, wnew_hist, wnew_active, bnd, diag):
+            t_start, t_pair, wl_start, wl_w, wl_hist, wl_active, bnd, diag):
     """Rebuild both lists; on overflow set the status and the needed size, change nothing."""
     need = build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist,
-                                nl_active, new_start, new_j, new_hist, new_active, t_start,
-                                t_pair, bnd[14])
-    if need > new_j.shape[0]:
+                                nl_active, t_start, t_pair, bnd[14])
+    if need > nl_j.shape[0]:
         diag[0] = STATUS_OVERFLOW
         diag[3] = need
         return
     f_cur = bnd[5]
     need = build_boundary_list(e_pos, e_radius, skin, f_cur, bnd[0], bnd[1], bnd[9], bnd[10],
-                               bnd[11], bnd[12], bnd[13], wl_start, wl_w, wl_hist, wl_active,
-                               wnew_start, wnew_w, wnew_hist, wnew_active)
-    if need > wnew_w.shape[0]:
+                               bnd[11], bnd[12], bnd[13], wl_start, wl_w, wl_hist, wl_active)
+    if need > wl_w.shape[0]:
         diag[0] = STATUS_WALL_OVERFLOW
         diag[3] = need
         return
@@ -762,11 +755,10 @@ def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_a
 @jit
 def finish_step(dt, gravity, skin, max_overlap, update_elements, fused, spin_only, b_pos,
                 b_vel, b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia,
-                b_vf, b_wf, b_aux,
-                b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref, nl_start, nl_j, nl_hist,
-                nl_active, nl_f, new_start, new_j, new_hist, new_active, t_start, t_pair,
-                wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, wnew_start, wnew_w, wnew_hist,
-                wnew_active, bnd, pair_model, pair_params, e_worst, e_count, diag):
+                b_vf, b_wf, b_aux, b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref,
+                nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair, wl_start, wl_w,
+                wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst, e_count,
+                diag):
     """Steps 3-5 of a step (after :func:`begin_step`, which left each element's squared
     displacement in ``e_worst``); sets ``diag[0]`` on trouble."""
     d2 = largest(e_worst)
@@ -778,8 +770,7 @@ def finish_step(dt, gravity, skin, max_overlap, update_elements, fused, spin_onl
     moved = boundary_motion_since_rebuild(bnd[5], bnd[6], bnd[7])
     if d2 > 0.25 * skin * skin or math.sqrt(d2) + moved > skin:
         rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_active,
-                new_start, new_j, new_hist, new_active, t_start, t_pair, wl_start, wl_w,
-                wl_hist, wl_active, wnew_start, wnew_w, wnew_hist, wnew_active, bnd, diag)
+                t_start, t_pair, wl_start, wl_w, wl_hist, wl_active, bnd, diag)
         if diag[0] != STATUS_OK:
             return
         if not FUSED:  # (fused_pass reads the rows of pairs across chunks only)
@@ -858,23 +849,28 @@ def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid
 @jit
 def build_boundary_list(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
                         cell_start, cell_items, prim_cells, wl_start, wl_w, wl_hist,
-                        wl_active, new_start, new_w, new_hist, new_active):
+                        wl_active):
     """Rebuild the element-primitive list (primitives within r + skin), merging history.
+    The new list is written into scratch arrays of its exact size, freed on return.
 
     Returns the number of entries; above the capacity nothing is changed.
     """
     n = e_pos.shape[0]
     counts = np.zeros(n, np.int64)
+    new_start = np.empty(n + 1, np.int64)
     boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
-                         cell_start, cell_items, prim_cells, counts, new_start, new_w, n < 0)
+                         cell_start, cell_items, prim_cells, counts, new_start, wl_w, n < 0)
     new_start[0] = 0
     for i in range(n):
         new_start[i + 1] = new_start[i] + counts[i]
     count = new_start[n]
-    if count > new_w.shape[0]:
+    if count > wl_w.shape[0]:
         return count
+    new_w = np.empty(count, wl_w.dtype)
     boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
                          cell_start, cell_items, prim_cells, counts, new_start, new_w, n >= 0)
+    new_hist = np.empty((count, wl_hist.shape[1]))
+    new_active = np.empty(count, np.uint8)
     merge_history(wl_start, wl_w, wl_hist, wl_active, new_start, new_w, new_hist, new_active)
     copy_back(count, new_start, new_w, new_hist, new_active, wl_start, wl_w, wl_hist,
               wl_active)
