@@ -16,6 +16,7 @@ if "NUMBA_THREADING_LAYER" not in _os.environ:
     # set by the user wins.
     _numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
 
+from ._memory import tune_malloc as _tune_malloc
 from .boundaries import Boundary
 from .errors import DpmError, ParameterError, SceneError, UnknownNameError, UnstableRunError
 from .flow import Inlet, Outlet
@@ -38,6 +39,8 @@ from .regions import BoxRegion, CylinderRegion, Region
 from .scene_tools import lattice
 from .shapes import Shape
 from .simulation import Simulation
+
+_tune_malloc()  # large arrays mapped on their own, freed back at once (dpm/_memory.py)
 
 __all__ = [
     "Boundary", "BoxRegion", "Compose", "CylinderRegion", "DpmError", "hookimpl",

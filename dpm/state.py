@@ -10,6 +10,17 @@ import numpy as np
 from .kernels.config import N_HISTORY
 
 
+def _appended(old: np.ndarray, value) -> np.ndarray:
+    """``old`` with the rows of ``value`` added, C-contiguous in ``old``'s dtype. While
+    ``old`` is empty the fresh ``value`` is taken without a copy: an all-zero array (a
+    sphere's element offsets, the shape index) then keeps its pages unmapped and costs no
+    resident memory, and a scene's set-up makes one copy less of each field."""
+    value = np.asarray(value)
+    if len(old) == 0:
+        return np.ascontiguousarray(value, dtype=old.dtype).reshape((-1,) + old.shape[1:])
+    return np.ascontiguousarray(np.concatenate([old, value.astype(old.dtype, copy=False)]))
+
+
 class Bodies:
     """Per-body arrays, one row per body.
 
@@ -46,10 +57,9 @@ class Bodies:
         return len(self.id)
 
     def append(self, **rows: np.ndarray) -> None:
+        """Add rows; the caller hands over fresh arrays, which the first rows keep."""
         for name, value in rows.items():
-            old = getattr(self, name)
-            new = np.concatenate([old, np.asarray(value).astype(old.dtype)])
-            setattr(self, name, np.ascontiguousarray(new))
+            setattr(self, name, _appended(getattr(self, name), value))
 
     def keep(self, mask: np.ndarray) -> None:
         """Keep only the bodies where ``mask`` is True (element_start recomputed)."""
@@ -74,10 +84,11 @@ class Elements:
         return len(self.owner)
 
     def append(self, owner, offset, radius, material) -> None:
-        self.owner = np.concatenate([self.owner, owner.astype(np.int64)])
-        self.offset = np.ascontiguousarray(np.concatenate([self.offset, offset]))
-        self.radius = np.concatenate([self.radius, radius])
-        self.material = np.concatenate([self.material, material.astype(np.int64)])
+        """Add elements (fresh arrays, kept as they are by the first rows)."""
+        self.owner = _appended(self.owner, owner)
+        self.offset = _appended(self.offset, offset)
+        self.radius = _appended(self.radius, radius)
+        self.material = _appended(self.material, material)
         self.position = np.zeros((len(self.owner), 3))
         self.reference = np.full((len(self.owner), 3), np.inf)  # forces a rebuild
 
@@ -87,6 +98,11 @@ class Elements:
         self.owner = np.ascontiguousarray(new_owner[self.owner[mask]])
         for name in ("offset", "radius", "material", "position", "reference"):
             setattr(self, name, np.ascontiguousarray(getattr(self, name)[mask]))
+
+
+#: partner keys and pair indices (element, primitive and pair numbers stay below 2**31):
+#: 4 bytes less per listed pair and per transposed entry than int64
+KEY_DTYPE = np.int32
 
 
 class _CsrList:
@@ -129,7 +145,7 @@ class _CsrList:
         self._allocate(max(int(capacity), 16))
 
     def _allocate(self, cap: int) -> None:
-        self.key = np.zeros(cap, np.int64)
+        self.key = np.zeros(cap, KEY_DTYPE)
         self.history = np.zeros((cap, self.history_width))
         self.active = np.zeros(cap, np.uint8)
         self.force = np.zeros((cap if self.rows else 0, self.FORCE_WIDTH))
@@ -181,11 +197,26 @@ class _CsrList:
 class Contacts(_CsrList):
     """Element pairs: half neighbour list in CSR form (``start``, ``key`` = partner j > i),
     one history row (``history_width`` floats), active flag and force row (F on i, torque on body
-    of i, torque on body of j) per pair; the transposed index ``t_start``/``t_pair``.
-    Pairs are within r_i + r_j + skin. The force rows are allocated only while a force
-    pass needs them (:meth:`use_rows`)."""
+    of i, torque on body of j) per pair; the transposed index ``t_start``/``t_pair`` (the
+    pairs where an element is second, in increasing order). Pairs are within
+    r_i + r_j + skin. The force rows and the transposed index exist only while a force pass
+    needs them (:meth:`use_rows`): the fused pass of one-thread sphere scenes needs neither
+    (``t_pair`` is then empty, ``t_start`` zero and the rebuild skips the transpose)."""
 
     ALWAYS_ROWS = False
+
+    def use_rows(self, rows: bool) -> None:
+        """Force rows and transposed index (built now from the list) or neither."""
+        was = self.rows
+        super().use_rows(rows)
+        if self.rows != was:
+            self.t_start = np.zeros(len(self.start), np.int64)
+            self.t_pair = np.zeros(self.capacity if self.rows else 0, KEY_DTYPE)
+            if self.rows:
+                keys = self.key[:self.count]
+                np.cumsum(np.bincount(keys, minlength=len(self.start) - 1),
+                          out=self.t_start[1:])
+                self.t_pair[:len(keys)] = np.argsort(keys, kind="stable")
 
     def reset(self, n_elements: int, capacity: int) -> None:
         super().reset(n_elements, capacity)
@@ -193,7 +224,7 @@ class Contacts(_CsrList):
 
     def _allocate(self, cap: int) -> None:
         super()._allocate(cap)
-        self.t_pair = np.zeros(cap, np.int64)
+        self.t_pair = np.zeros(cap if self.rows else 0, KEY_DTYPE)
 
     def grow(self, needed: int) -> None:
         super().grow(needed)  # t_pair is rebuilt with the list

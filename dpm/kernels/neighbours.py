@@ -90,7 +90,7 @@ def bin_elements(e_pos, cell_size, period):
         if width[d] < cell_size and period[3 + d] == 0.0:
             width[d] = cell_size
     ncell = dims[0] * dims[1] * dims[2]
-    cell_of = np.empty(n, dtype=np.int64)
+    cell_of = np.empty(n, dtype=np.int32)
     cell_start = np.zeros(ncell + 1, dtype=np.int64)
     for i in range(n):
         c = 0
@@ -104,7 +104,7 @@ def bin_elements(e_pos, cell_size, period):
     for c in range(ncell):
         cell_start[c + 1] += cell_start[c]
     fill = cell_start[:-1].copy()
-    order = np.empty(n, dtype=np.int64)
+    order = np.empty(n, dtype=np.int32)
     for i in range(n):
         c = cell_of[i]
         order[fill[c]] = i
@@ -151,7 +151,7 @@ def _sorted_copies(e_pos, e_radius, e_owner, order):
     search reads each cell's candidates from contiguous memory."""
     n = e_pos.shape[0]
     sp = np.empty((n, 4))
-    so = np.empty(n, np.int64)
+    so = np.empty(n, np.int32)
     for s in prange(n):
         j = order[s]
         sp[s, 0] = e_pos[j, 0]
@@ -295,7 +295,7 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
             rmax = e_radius[i]
     lo, width, dims, cell_start, order = bin_elements(e_pos, 2.0 * rmax + skin, period)
     sp, so = _sorted_copies(e_pos, e_radius, e_owner, order)
-    counts = np.zeros(n, np.int64)
+    counts = np.zeros(n, np.int32)
     slot_start = np.empty(n + 1, np.int64)
     slot_start[0] = 0
     for i in range(n):
@@ -330,7 +330,8 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
     _merge(nl_start, nl_j, nl_hist, nl_active, new_start, new_j, new_hist, new_active)
     _copy_back(count, new_start, new_j, new_hist, new_active, nl_start, nl_j, nl_hist,
                nl_active)
-    build_transpose(nl_start, nl_j, t_start, t_pair)
+    if t_pair.shape[0] > 0:  # (none while no force pass needs it)
+        build_transpose(nl_start, nl_j, t_start, t_pair)
     return count
 
 
