@@ -446,3 +446,22 @@ def test_unstable_head_on_collision_stops(glass):
         sim.run(steps=1000, progress=False)
     assert 0 < sim.step_count < 1000
     assert np.all(np.isfinite(sim.bodies.position))
+
+
+@pytest.mark.parametrize("block", [2, 1 << 16])
+def test_speed_check_names_the_fastest_body_in_any_block(glass, monkeypatch, block):
+    """After each kernel call the fastest body is found block by block; a body that moves
+    more than half its radius per step stops the run with its id and the largest safe dt."""
+    from dpm import simulation
+
+    monkeypatch.setattr(simulation, "SPEED_BLOCK", block)
+    sim = dpm.Simulation(dt=1e-4, gravity=(0, 0, 0), dt_check="off")
+    sim.contact(glass, glass, model="hertz_mindlin", restitution=0.5, friction=0.3)
+    pos = [(0, 0, 0), (0.01, 0, 0), (0.02, 0, 0), (0.03, 0, 0), (0.04, 0, 0)]
+    vel = np.zeros((5, 3))
+    vel[1, 1] = 2.0  # 0.2 mm per step: slower than half a radius
+    vel[3, 2] = -9.0  # 0.9 mm per step against a 1 mm radius: the fastest, in block 2
+    ids = sim.add_particles("sphere", material=glass, radius=1e-3, positions=pos,
+                            velocities=vel)
+    with pytest.raises(dpm.UnstableRunError, match=rf"particle {ids[3]} moves 0\.0009 m"):
+        sim.run(steps=1, progress=False)
