@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .errors import SceneError
 from .kernels.config import N_HISTORY
 
 
@@ -187,6 +188,9 @@ class _CsrList:
 
     def grow(self, needed: int) -> None:
         """Enlarge the buffers to hold ``needed`` entries (with headroom); keep the list."""
+        if needed >= np.iinfo(KEY_DTYPE).max:
+            raise SceneError(f"{needed} list entries: more than the {np.iinfo(KEY_DTYPE).max} "
+                             "that int32 pair indices allow; split the scene")
         n = self.count
         old = (self.key, self.history, self.active)
         self._allocate(int(needed * 1.25) + 16)

@@ -112,3 +112,12 @@ def test_first_rows_taken_without_copy_later_rows_appended():
     b.append(position=pos)
     assert np.shares_memory(b.position, pos) and b.position.shape == (2, 3)
     assert _memory.MMAP_THRESHOLD == 1 << 20
+
+
+def test_list_beyond_int32_indices_refused():
+    from dpm.state import Contacts
+
+    c = Contacts(4, 16)
+    with pytest.raises(dpm.SceneError, match="int32 pair indices"):
+        c.grow(2**31)
+    assert c.capacity == 16  # nothing allocated

@@ -50,5 +50,6 @@ class Shape:
         self.params = validate(call or f"{type(self).__name__}()", self.parameters, params)
 
     def build(self, count: int, density: float) -> BodyBatch:
-        """Return the bodies' mass properties and elements for ``count`` bodies."""
+        """Return the bodies' mass properties and elements for ``count`` bodies, in fresh
+        arrays: the simulation may keep them without a copy."""
         raise NotImplementedError
