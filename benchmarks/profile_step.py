@@ -51,6 +51,9 @@ def main() -> None:
         0.0, False, False, b.position, b.velocity, b.orientation, b.angular_velocity, b.force,
         b.torque, b.invmass, b.invinertia, sim._vf, sim._wf, sim._aux, b.element_start,
         e.offset, e.position, e.reference, sim._e_worst), 200)
+    # the two-pass form's passes need the force rows and the transposed index, which the
+    # one-thread fused step of this scene does without
+    c.use_rows(True)
     contact = timed(lambda: m.contact_pass(
         0.0, b.position, sim._vf, sim._wf, b.mass, b.invmass, e.owner, e.radius, e.material,
         e.position, c.start, c.key, c.history, c.active, c.force, wc.start, wc.key,

@@ -261,7 +261,7 @@ class Simulation:
                              _filled(len(owner), imat, np.int64))
         self._prepared = False
         self._forces_valid = False
-        return ids
+        return ids.copy()  # (the bodies keep ``ids`` itself: see Bodies.append)
 
     def set_periodic(self, axis: str | int, lower: float, upper: float) -> None:
         """Make ``axis`` ("x", "y", "z" or 0-2) periodic between ``lower`` and ``upper``

@@ -17,8 +17,11 @@ def _appended(old: np.ndarray, value) -> np.ndarray:
     sphere's element offsets, the shape index) then keeps its pages unmapped and costs no
     resident memory, and a scene's set-up makes one copy less of each field."""
     value = np.asarray(value)
+    if value.shape[1:] != old.shape[1:] or value.ndim != old.ndim:
+        raise ValueError(f"rows of shape {value.shape[1:]} (array {value.shape}) appended to "
+                         f"rows of shape {old.shape[1:]}")
     if len(old) == 0:
-        return np.ascontiguousarray(value, dtype=old.dtype).reshape((-1,) + old.shape[1:])
+        return np.ascontiguousarray(value, dtype=old.dtype)
     return np.ascontiguousarray(np.concatenate([old, value.astype(old.dtype, copy=False)]))
 
 
@@ -104,6 +107,8 @@ class Elements:
 #: partner keys and pair indices (element, primitive and pair numbers stay below 2**31):
 #: 4 bytes less per listed pair and per transposed entry than int64
 KEY_DTYPE = np.int32
+#: the largest list size and element count (so that every index fits)
+KEY_MAX = int(np.iinfo(KEY_DTYPE).max)
 
 
 class _CsrList:
@@ -142,10 +147,14 @@ class _CsrList:
         self.history = new
 
     def reset(self, n_elements: int, capacity: int) -> None:
+        if n_elements > KEY_MAX:
+            raise SceneError(f"{n_elements} elements: more than the {KEY_MAX} that int32 "
+                             "indices allow; split the scene")
         self.start = np.zeros(n_elements + 1, np.int64)
         self._allocate(max(int(capacity), 16))
 
     def _allocate(self, cap: int) -> None:
+        cap = min(cap, KEY_MAX)  # (a list of more entries is refused by grow)
         self.key = np.zeros(cap, KEY_DTYPE)
         self.history = np.zeros((cap, self.history_width))
         self.active = np.zeros(cap, np.uint8)
@@ -188,9 +197,9 @@ class _CsrList:
 
     def grow(self, needed: int) -> None:
         """Enlarge the buffers to hold ``needed`` entries (with headroom); keep the list."""
-        if needed >= np.iinfo(KEY_DTYPE).max:
-            raise SceneError(f"{needed} list entries: more than the {np.iinfo(KEY_DTYPE).max} "
-                             "that int32 pair indices allow; split the scene")
+        if needed > KEY_MAX:
+            raise SceneError(f"{needed} list entries: more than the {KEY_MAX} that int32 "
+                             "pair indices allow; split the scene")
         n = self.count
         old = (self.key, self.history, self.active)
         self._allocate(int(needed * 1.25) + 16)

@@ -121,3 +121,24 @@ def test_list_beyond_int32_indices_refused():
     with pytest.raises(dpm.SceneError, match="int32 pair indices"):
         c.grow(2**31)
     assert c.capacity == 16  # nothing allocated
+
+
+def test_returned_ids_are_not_the_bodies_own():
+    sim = _spheres(threads=1)
+    ids = sim.add_particles("sphere", material=dpm.Material("m", density=1000, young=1e7,
+                                                             poisson=0.3),
+                            positions=[(0.5, 0.5, 0.5)], radius=1e-3)
+    ids[:] = -1  # the caller's array: the scene's ids stay as they were
+    assert sim.bodies.id[-1] != -1
+    fresh = dpm.Simulation(dt=1e-5)
+    mat = dpm.Material("m", density=1000, young=1e7, poisson=0.3)
+    ids = fresh.add_particles("sphere", material=mat, positions=[(0, 0, 0), (1, 0, 0)],
+                              radius=1e-3)
+    ids[::-1].sort()
+    np.testing.assert_array_equal(fresh.bodies.id, [0, 1])
+
+
+def test_rows_of_another_shape_refused():
+    b = Bodies()
+    with pytest.raises(ValueError, match="rows of shape"):
+        b.append(inertia=np.ones(3))  # (3,) where rows of 3 are expected

@@ -21,6 +21,7 @@ import hashlib
 import json
 import math
 import os
+import threading
 from functools import lru_cache
 from pathlib import Path
 
@@ -51,11 +52,14 @@ def _solved() -> dict:
             _SOLVED = json.loads(_solved_path().read_text())
         except (OSError, ValueError):
             _SOLVED = {}
+        if not isinstance(_SOLVED, dict):
+            _SOLVED = {}
     return _SOLVED
 
 
 def remembered(fn):
-    """Memoize a solution of one float argument in memory and on disk.
+    """Memoize a solution of one float argument in memory and on disk (the root
+    finders call ``.solve``, the function itself, so only the answers are stored).
 
     A warm start then neither solves an ODE nor imports scipy (scipy.integrate and
     scipy.optimize are 38 MB of resident memory and 0.3 s). The values are exact: JSON
@@ -76,13 +80,14 @@ def remembered(fn):
         path = _solved_path()
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+            tmp = path.with_name(f"{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
             tmp.write_text(json.dumps(_solved()))
             os.replace(tmp, path)
         except OSError:  # a read-only cache: solve again next time
             pass
         return value
 
+    wrapper.solve = fn  # the solution itself, neither remembered nor looked up
     return wrapper
 
 
@@ -151,13 +156,13 @@ def _invert(fun, restitution: float, what: str) -> float:
 def tsuji_beta_for_restitution(restitution: float) -> float:
     """beta of the Tsuji damping that gives ``restitution`` with the cut-off (e.g. 0.5 ->
     0.2553, where the no-cut-off formula -ln e / sqrt(ln^2 e + pi^2) gives 0.2155)."""
-    return _invert(tsuji_collision, restitution, "Tsuji")
+    return _invert(tsuji_collision.solve, restitution, "Tsuji")
 
 
 @remembered
 def brilliantov_gamma_for_restitution(restitution: float) -> float:
     """gamma = A (k/m*)^(2/5) v^(1/5) that gives ``restitution`` (viscoelastic Hertz)."""
-    return _invert(brilliantov_collision, restitution, "viscoelastic")
+    return _invert(brilliantov_collision.solve, restitution, "viscoelastic")
 
 
 def hertz_scales(meff: float, reff: float, estar: float, speed: float) -> tuple[float, float]:
