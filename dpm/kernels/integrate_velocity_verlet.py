@@ -23,8 +23,8 @@ from .integrate_common import rotation_first_half, rotation_second_half
 
 
 @inline_jit
-def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, vf, wf, aux):
-    """Half kick and drift; predicted velocities for the forces."""
+def kick_and_drift(i, pos, vel, force, invmass, dt, vf):
+    """v += dt/2 F/m, x += dt v, and the predicted velocity v + dt/2 F/m for the forces."""
     h = 0.5 * dt
     im = invmass[i]
     for d in range(3):
@@ -32,6 +32,12 @@ def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia
         vel[i, d] += dv
         pos[i, d] += dt * vel[i, d]
         vf[i, d] = vel[i, d] + dv
+
+
+@inline_jit
+def pre_force_body(i, pos, vel, quat, angvel, force, torque, invmass, invinertia, dt, vf, wf, aux):
+    """Half kick and drift; predicted velocities for the forces."""
+    kick_and_drift(i, pos, vel, force, invmass, dt, vf)
     rotation_first_half(i, quat, angvel, torque, invinertia, dt, wf)
 
 
@@ -41,13 +47,8 @@ def pre_force_sphere(i, pos, vel, quat, angvel, force, torque, invmass, invinert
     """:func:`pre_force_body` for a single sphere whose orientation is not tracked: the
     same half kicks and drift, bit for bit, without the quaternion update (no force depends
     on a sphere's orientation; LIGGGHTS' ``nve/sphere`` does the same)."""
+    kick_and_drift(i, pos, vel, force, invmass, dt, vf)
     h = 0.5 * dt
-    im = invmass[i]
-    for d in range(3):
-        dv = h * force[i, d] * im
-        vel[i, d] += dv
-        pos[i, d] += dt * vel[i, d]
-        vf[i, d] = vel[i, d] + dv
     i0 = invinertia[i, 0]
     for d in range(3):
         dw = h * torque[i, d] * i0
