@@ -186,13 +186,13 @@ def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000,
         args = (e.position, e.radius, sim.skin, wt.frame, wt.kind, wt.par, wt.grid_int,
                 wt.grid_flt, wt.cell_start, wt.cell_items, wt.prim_cells, counts,
                 sim.wall_contacts.start, sim.wall_contacts.key, False)
-        sim._module.boundary_search_pass(*args)
+        sim.backend.module.boundary_search_pass(*args)
         reps = max(1, int(20000 / len(pos)))
         best = math.inf
         for _ in range(5):
             t1 = time.perf_counter()
             for _ in range(reps):
-                sim._module.boundary_search_pass(*args)
+                sim.backend.module.boundary_search_pass(*args)
             best = min(best, (time.perf_counter() - t1) / reps)
         rebuild = best / len(pos)
         # (b) steps without rebuild (the spheres barely move)

@@ -73,13 +73,13 @@ def hertz_reference() -> dict:
 def _sim(integrator: str, dt: float, law: str, guard: bool = True,
          **kw) -> tuple[dpm.Simulation, dpm.Material]:
     """A scene without bodies. ``guard=False`` switches off the engine's tunnelling guard
-    (``Simulation._check_speeds``: a run stops when a body moves more than half its radius
+    (``Simulation.speed_guard``: a run stops when a body moves more than half its radius
     in a step) on this instance only, so that an integrator's own error can be measured
     where the guard would stop the run; the guarded runs record whether it fires."""
     sim = dpm.Simulation(dt=dt, integrator=integrator, dt_check="off", max_overlap=2.0,
                          threads=1, **kw)
     if not guard:
-        sim._check_speeds = lambda: None
+        sim.speed_guard = False
     if law == "linear":
         m = dpm.Material("glass", density=RHO)
         sim.contact(m, m, model="linear_spring_dashpot", stiffness=K_LIN, restitution=1.0,
@@ -371,7 +371,7 @@ def park(sim: dpm.Simulation, idx: np.ndarray) -> None:
     b.force[idx] = b.mass[idx, None] * sim.gravity
     b.torque[idx] = 0.0
     name = sim.integrator.name
-    aux = sim._aux
+    aux = sim.backend.aux
     if name == "position_verlet":
         aux[idx, 3:6] = np.nan  # != velocity: the kernel restarts the difference
     elif name in ("gear4", "gear5"):
@@ -393,7 +393,7 @@ def hopper(integrator: str, dt: float, scene: dict, duration: float,
     sim = dpm.Simulation(dt=dt, gravity=(0, 0, -9.81), integrator=integrator,
                          dt_check="off", max_overlap=1.5, overlap_tolerance=1.0, threads=1)
     if not guard:
-        sim._check_speeds = lambda: None
+        sim.speed_guard = False
     steel = dpm.Material("steel", density=STEEL)
     sim.contact(steel, steel, model="linear_spring_dashpot", stiffness=HOPPER_K,
                 restitution=1.0, friction=0.0)

@@ -32,7 +32,7 @@ import box_settle  # noqa: E402
 def per_step(sim, threads: int, two_pass: bool, orient: bool, steps: int = 100) -> float:
     """Wall time per step [us] of ``steps`` steps in this variant (state carries on)."""
     sim.threads = threads
-    sim._two_pass = two_pass
+    sim.backend.force_pass = "two_pass" if two_pass else "auto"
     sim.sphere_orientation = orient
     t = time.perf_counter()
     sim.run(steps=steps, progress=False)
@@ -50,7 +50,7 @@ def main() -> None:
         per_step(sim, *v, steps=2)
     for _ in range(4):
         sim.threads = 1
-        sim._two_pass = False
+        sim.backend.force_pass = "auto"
         sim.sphere_orientation = False
         t0 = time.perf_counter()
         r0 = sim.rebuild_count
@@ -58,7 +58,7 @@ def main() -> None:
         wall = time.perf_counter() - t0
         line = (f"steps {sim.step_count}: stage {wall / 5000 * 1e6:.0f} us/step, rebuilds "
                 f"{sim.rebuild_count - r0}, pairs {sim.contacts.count}, touching "
-                f"{int(sim._diag[6])} |")
+                f"{sim.contact_count()} |")
         times = {k: [] for k in variants}
         for _ in range(3):
             for k, v in variants.items():

@@ -19,6 +19,7 @@ import numba
 from scaling import CASES, D, scene_arrays  # noqa: I001  (run from benchmarks/)
 
 import dpm
+from dpm.backends.records import PairList
 
 
 def timed(fn, reps: int) -> float:
@@ -42,33 +43,22 @@ def main() -> None:
     sim.add_boundary("box", material=g, lower=(0, 0, 0), upper=box, open="+z")
     sim.add_particles("sphere", material=g, radius=D / 2, positions=pos, velocities=vel)
     sim.run(steps=50, progress=False)
-    m, args, dt = sim._module, sim._args(), sim.dt
-    b, e, c, wc = sim.bodies, sim.elements, sim.contacts, sim.wall_contacts
+    be, dt = sim.backend, sim.dt
+    m = be.module
+    b, c = sim.bodies, sim.contacts
     n = len(b)
     table = sim._frame_table(100, sim.step_count)
-    step = timed(lambda: m.run_steps(100, dt, *args, table), 5) / 100
-    begin = timed(lambda: m.begin_step(
-        0.0, False, False, b.position, b.velocity, b.orientation, b.angular_velocity, b.force,
-        b.torque, b.invmass, b.invinertia, sim._vf, sim._wf, sim._aux, b.element_start,
-        e.offset, e.position, e.reference, sim._e_worst), 200)
+    step = timed(lambda: m.run_steps(100, dt, *be.records(), be.diag, table), 5) / 100
+    ctl, bodies, elems, _, walls, bnd = be.records()
+    begin = timed(lambda: m.pre_force(0.0, ctl, bodies, elems), 200)
     # the two-pass form's passes need the force rows and the transposed index, which the
     # one-thread fused step of this scene does without
     c.use_rows(True)
-    contact = timed(lambda: m.contact_pass(
-        0.0, b.position, sim._vf, sim._wf, b.mass, b.invmass, e.owner, e.radius, e.material,
-        e.position, c.start, c.key, c.history, c.active, c.force, wc.start, wc.key,
-        wc.history, wc.active, wc.force, wc.tag, sim._bnd(), sim._pair_model,
-        sim._pair_params, sim._e_worst, sim._e_count), 200)
-    summed = timed(lambda: m.sum_pass(
-        0.0, False, sim.gravity, b.position, b.velocity, b.orientation, b.angular_velocity,
-        b.force, b.torque, b.mass, b.invmass, b.invinertia, sim._aux, b.element_start, c.start,
-        c.active, c.force, c.t_start, c.t_pair, wc.start, wc.active, wc.force,
-        sim._e_count), 200)
-    rebuild = timed(lambda: m.rebuild(
-        sim.skin, e.owner, e.radius, e.position, e.reference, c.start, c.key, c.history,
-        c.active, c.t_start, c.t_pair, wc.start, wc.key, wc.history, wc.active, sim._bnd(),
-        sim._diag), 10)
-    print(f"{a.case} box, {n} spheres, {c.count} listed pairs, {int(sim._diag[6])} touching; "
+    pairs = PairList(c.start, c.key, c.history, c.active, c.force, c.t_start, c.t_pair)
+    contact = timed(lambda: m.contact_pass(0.0, ctl, bodies, elems, pairs, walls, bnd), 200)
+    summed = timed(lambda: m.sum_pass(0.0, False, ctl, bodies, elems, pairs, walls), 200)
+    rebuild = timed(lambda: m.rebuild(ctl, elems, pairs, walls, bnd, be.diag), 10)
+    print(f"{a.case} box, {n} spheres, {c.count} listed pairs, {sim.contact_count()} touching; "
           f"us per step: step {step:.0f} | begin {begin:.0f} ({begin / n * 1e3:.0f} ns per "
           f"body) | contact {contact:.0f} | sum {summed:.0f} | one rebuild {rebuild:.0f}")
 

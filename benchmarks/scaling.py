@@ -76,7 +76,7 @@ def worker(k: int, case: str, threads: int, steps: int) -> dict:
             "wall_s": wall, "particle_steps_per_s": n * steps / wall,
             "time_to_first_steps_s": first, "startup_s": startup,
             "peak_rss_bytes": rss, "rss_per_particle": rss / n,
-            "contacts": int(sim._diag[6])}
+            "contacts": sim.contact_count()}
 
 
 def liggghts(k: int, case: str, steps: int) -> dict | None:

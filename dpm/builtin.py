@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from .backends.cpu import CpuBackend
 from .boundaries import Bend, Box, Mesh, Plane, Sieve, Tube, Wall
 from .hookspecs import Register, hookimpl
 from .impact import (
@@ -66,3 +67,8 @@ def dpm_register_integrators(register: Register) -> None:
     register("backward_euler", BackwardEuler)
     register("newmark_beta", NewmarkBeta)
     register("numerov", Numerov)
+
+
+@hookimpl
+def dpm_register_backends(register: Register) -> None:
+    register("cpu", CpuBackend)

@@ -144,6 +144,10 @@ class Inlet:
         self._last = max(t, self._last or t)
         return self._due
 
+    def settle(self, owed: float) -> None:
+        """What stays owed after an insertion event (bodies, or kg for ``mass_rate``)."""
+        self._due = float(owed)
+
     def draw(self) -> tuple[str, dict[str, float]]:
         """One body's shape name and parameters."""
         k = int(self.rng.choice(len(self.shapes), p=self.fractions))

@@ -50,6 +50,12 @@ def dpm_register_integrators(register: Register) -> None:
 
 
 @hookspec
+def dpm_register_backends(register: Register) -> None:
+    """Call ``register(name, cls)`` for each backend class provided (the protocol of
+    :class:`dpm.backends.base.Backend`; ``Simulation(device=name)`` selects it)."""
+
+
+@hookspec
 def dpm_before_step(sim: Simulation) -> None:
     """Called before every step (makes the run return to Python each step)."""
 

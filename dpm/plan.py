@@ -173,3 +173,52 @@ def clear_cache() -> list[Path]:
             f.unlink()
             removed.append(f)
     return removed
+
+
+class ScenePlan:
+    """What the scene needs from the kernels, resolved once per scene (:func:`plan_scene`):
+    the contact laws in use and the material-pair tables (``pair_model[a, b]`` picks the
+    law, ``pair_params[a, b, :]`` its constants), the history width per contact, the
+    integrator's kernel module, the boundary kinds present, whether axes are periodic,
+    whether a boundary moves and whether every body is a single sphere at its centre."""
+
+    def __init__(self, laws: list[tuple[str, str]], pair_model, pair_params,
+                 history_width: int, integrator_module: str, kinds: list[int],
+                 periodic: bool, moving: bool, spheres_only: bool) -> None:
+        self.laws = laws
+        self.pair_model = pair_model
+        self.pair_params = pair_params
+        self.history_width = history_width
+        self.integrator_module = integrator_module
+        self.kinds = kinds
+        self.periodic = periodic
+        self.moving = moving
+        self.spheres_only = spheres_only
+
+    def module(self, fused: bool) -> ModuleType:
+        """The generated step module of this scene for one force form."""
+        return step_module(self.laws, self.integrator_module, self.kinds, self.periodic,
+                           fused=fused)
+
+
+def pair_tables(materials, contacts, context) -> tuple[list, object, object, int]:
+    """(laws, pair_model, pair_params, history width) of the material pairs.
+
+    ``contacts``: {(a, b): ImpactModel}; ``context(a, b)``: the
+    :class:`dpm.impact.base.PairContext` of the pair. One law index per distinct kernel;
+    the history width is the widest the laws declare (3-5 more for a rolling spring)."""
+    import numpy as np
+
+    nm = len(materials)
+    laws: list[tuple[str, str]] = []
+    pair_model = np.zeros((nm, nm), np.int64)
+    pair_params = np.zeros((nm, nm, 8))
+    for (ia, ib), law in contacts.items():
+        if law.kernel not in laws:
+            laws.append(law.kernel)
+        pair_model[ia, ib] = laws.index(law.kernel)
+        pair_params[ia, ib] = law.pair_row(materials[ia], materials[ib], context(ia, ib))
+    width = max([law.history_slots for law in contacts.values()] + [3])
+    if np.any(pair_params[:, :, 6] != 0.0):
+        width = max(width, 6)
+    return laws, pair_model, pair_params, width

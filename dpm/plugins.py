@@ -16,12 +16,13 @@ import pluggy
 from . import hookspecs
 from .errors import ParameterError, UnknownNameError
 
-KINDS = ("shape", "boundary", "impact_model", "integrator")
+KINDS = ("shape", "boundary", "impact_model", "integrator", "backend")
 _HOOK = {
     "shape": "dpm_register_shapes",
     "boundary": "dpm_register_boundaries",
     "impact_model": "dpm_register_impact_models",
     "integrator": "dpm_register_integrators",
+    "backend": "dpm_register_backends",
 }
 
 

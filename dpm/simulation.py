@@ -1,9 +1,9 @@
-"""The Simulation: owns the state, the scene description and the run loop."""
+"""The Simulation: the conductor. It owns the scene description, the state, one backend
+and the event schedule; the steps themselves run in the backend (:mod:`dpm.backends`)."""
 
 from __future__ import annotations
 
 import math
-import os
 import time as _time
 import warnings
 from collections.abc import Sequence
@@ -12,34 +12,28 @@ from typing import Any
 import numba
 import numpy as np
 
+from . import diagnosis, population, scene_check
+from . import measures as _measures
 from . import plan as _plan
+from .backends.base import STATUS_NAN, STATUS_OK, STATUS_OVERLAP, Backend, StepResult
+from .backends.cpu import SMALL_SCENE, default_threads  # noqa: F401  (public names)
 from .boundaries.base import Boundary
-from .errors import ParameterError, SceneError, UnstableRunError
-from .flow import Inlet, Outlet, random_quaternions
+from .errors import ParameterError
+from .flow import Inlet, Outlet
 from .impact.base import ImpactModel, PairContext
-from .kernels.step import (
-    STATUS_NAN,
-    STATUS_OK,
-    STATUS_OVERFLOW,
-    STATUS_OVERLAP,
-    STATUS_WALL_OVERFLOW,
-)
 from .material import Material
+from .measures import to_body as _to_body  # noqa: F401  (used by tests and scripts)
 from .motion import frames
 from .parameters import Parameter, validate
 from .plugins import registry
 from .regions import Region
 from .shapes.base import Shape
 from .state import Bodies, BoundaryTable, Contacts, Elements, WallContacts
-from .timestep import TimeStepReport
+from .timestep import TimeStepReport, scene_report, smallest_pair
 
 DT_CHECKS = ("refuse", "warn", "off")
-#: scenes with fewer elements run on one thread unless ``threads`` is given
-SMALL_SCENE = 4000
 #: most steps per kernel call while boundaries move (frames are tabulated per call)
 MOVING_CHUNK = 2000
-#: bodies per block of the speed check after each call
-SPEED_BLOCK = 1 << 16
 
 
 class Simulation:
@@ -77,11 +71,13 @@ class Simulation:
         stays as inserted, which spares about a tenth of a settled packing's step.
         Positions, velocities and angular velocities are the same bit for bit either way.
         Clustered bodies always rotate.
+    device : str or Backend
+        Where the steps run: a registered backend name (``"cpu"``, the default; ``dpm
+        plugins`` lists them) or a backend instance (e.g.
+        ``dpm.backends.CpuBackend(force_pass="two_pass")``). The script is the same for
+        every backend (:mod:`dpm.backends.base`).
 
-    Order of one step (see :mod:`dpm.kernels.step`): integrator pre-force part, element
-    positions, neighbour list (rebuilt when an element moved more than skin/2), gravity and
-    contact forces, integrator post-force part. Hooks ``dpm_before_step``/``dpm_after_step``
-    run around steps, ``dpm_on_output`` after each frame.
+    The order of a step and of the events around it is given in :meth:`run`.
 
     Example
     -------
@@ -106,14 +102,13 @@ class Simulation:
                  integrator: str = "velocity_verlet", skin: float | None = None,
                  dt_check: str = "refuse", max_overlap: float = 0.5,
                  overlap_tolerance: float = 0.01, threads: int | None = None,
-                 sphere_orientation: bool = True) -> None:
+                 sphere_orientation: bool = True, device: str | Backend = "cpu") -> None:
         self._auto_dt = isinstance(dt, str) and dt == "auto"
         v = validate("Simulation()", self.parameters, dict(
             dt=1.0 if self._auto_dt else dt, gravity=gravity, integrator=integrator,
             skin=skin, dt_check=dt_check,
             max_overlap=max_overlap, overlap_tolerance=overlap_tolerance, threads=threads,
             sphere_orientation=sphere_orientation))
-        self.threads = None if threads is None else int(threads)
         #: track the orientation of single-sphere bodies (see the class docstring)
         self.sphere_orientation = bool(v["sphere_orientation"])
         if v["dt_check"] not in DT_CHECKS:
@@ -122,6 +117,16 @@ class Simulation:
         self._registry = registry()
         self.integrator = self._registry.lookup("integrator", integrator,
                                                 "Simulation()")()
+        if isinstance(device, str):
+            cls = self._registry.lookup("backend", device, "Simulation()")
+            device = cls(threads=None if threads is None else int(threads))
+        elif not isinstance(device, Backend):
+            raise ParameterError(f"Simulation(): device={device!r} is neither a registered "
+                                 "backend name nor a backend instance")
+        elif threads is not None:
+            device.threads = int(threads)
+        #: the backend the steps run on (:mod:`dpm.backends`)
+        self.backend: Backend = device
         self.dt = float("nan") if self._auto_dt else float(v["dt"])
         self.gravity = np.asarray(v["gravity"], float)
         self.skin = v["skin"]
@@ -129,6 +134,8 @@ class Simulation:
         self.max_overlap = float(v["max_overlap"])
         self.overlap_tolerance = float(v["overlap_tolerance"])
         self.materials: list[Material] = []
+        #: registered shape names; ``bodies.shape`` indexes this list
+        self.shape_names: list[str] = []
         self._contacts: dict[tuple[int, int], ImpactModel] = {}
         self.boundaries: list[Boundary] = []
         self.inlets: list[Inlet] = []
@@ -140,25 +147,34 @@ class Simulation:
         self.contacts = Contacts()
         self.wall_contacts = WallContacts()
         self.walls: BoundaryTable | None = None
+        #: what the kernels need of this scene (:class:`dpm.plan.ScenePlan`), made when
+        #: the run starts
+        self.plan: _plan.ScenePlan | None = None
         self.time = 0.0
         self.step_count = 0
         self.rebuild_count = 0
         self._next_id = 0
         self._prepared = False
         self._forces_valid = False
-        self._rows_stale = False  # pair force rows left stale by the fused pass
         self._check_cost = 0.0  # seconds of the checks after the last kernel call
-        self._two_pass = False  # True: sum forces in two passes even for spheres (tests)
+        #: stop the run when a body moves more than half its radius in a step (contacts
+        #: would be missed); False only to measure an integrator's own error past it
+        self.speed_guard = True
         self._writer = None
         #: the Writer of the latest output file (open or closed): .path, .frames
         self.last_output = None
         self._output_path: str | None = None
         self._output_every: int | None = None
         self._output_every_s: float | None = None
-        self._diag = np.zeros(8)
-        self._module = None
-        self._pair_model = np.zeros((0, 0), np.int64)
-        self._pair_params = np.zeros((0, 0, 8))
+
+    @property
+    def threads(self) -> int | None:
+        """Threads of the step kernels (None: the backend's default)."""
+        return getattr(self.backend, "threads", None)
+
+    @threads.setter
+    def threads(self, value: int | None) -> None:
+        self.backend.threads = None if value is None else int(value)
 
     # ----------------------------------------------------------------- scene building
     def _material_index(self, m: Material, call: str) -> int:
@@ -242,26 +258,7 @@ class Simulation:
         else:
             cls = self._registry.lookup("shape", shape, call)
             sh = cls(call=call, **shape_params)
-        batch = sh.build(n, material.density)
-        quat = _quat_multiply(quat, np.asarray(batch.principal_rotation, float))
-        first = len(self.bodies)
-        ids = np.arange(self._next_id, self._next_id + n, dtype=np.int64)
-        self._next_id += n
-        self.bodies.append(
-            id=ids, position=pos, velocity=vel, angular_velocity=ang, orientation=quat,
-            force=np.zeros((n, 3)), torque=np.zeros((n, 3)), mass=batch.mass,
-            inertia=batch.inertia, invmass=1.0 / batch.mass, invinertia=1.0 / batch.inertia,
-            radius=batch.bounding_radius, material=_filled(n, imat, np.int64),
-            shape=np.zeros(n, np.int64), birth=_filled(n, self.time, float))
-        b = self.bodies
-        b.element_start = np.concatenate(
-            [b.element_start, b.element_start[-1] + np.cumsum(batch.element_count)])
-        owner = np.repeat(np.arange(first, first + n), batch.element_count)
-        self.elements.append(owner, batch.element_offset, batch.element_radius,
-                             _filled(len(owner), imat, np.int64))
-        self._prepared = False
-        self._forces_valid = False
-        return ids.copy()  # (the bodies keep ``ids`` itself: see Bodies.append)
+        return population.append_bodies(self, sh, imat, material.density, pos, vel, ang, quat)
 
     def set_periodic(self, axis: str | int, lower: float, upper: float) -> None:
         """Make ``axis`` ("x", "y", "z" or 0-2) periodic between ``lower`` and ``upper``
@@ -280,32 +277,6 @@ class Simulation:
         self._prepared = False
         self._forces_valid = False
 
-    def _check_period(self) -> None:
-        need = 2.0 * (2.0 * float(self.elements.radius.max()) + self.skin)
-        for d in range(3):
-            if 0.0 < self.period[3 + d] < need:
-                raise ParameterError(
-                    f"sim.set_periodic(): the period along {'xyz'[d]} is "
-                    f"{self.period[3 + d]:.4g} m; it must be at least {need:.4g} m (twice "
-                    "the contact search range 2 r_max + skin) for nearest images to be unique")
-
-    def _wrap_periodic(self) -> None:
-        """Move bodies that left the periodic box back in by whole periods (their elements
-        and rebuild references move with them, so no rebuild is triggered)."""
-        b, e = self.bodies, self.elements
-        for d in range(3):
-            length = self.period[3 + d]
-            if length <= 0.0 or len(b) == 0:
-                continue
-            shift = np.floor((b.position[:, d] - self.period[d]) / length) * length
-            moved = shift != 0.0
-            if not np.any(moved):
-                continue
-            b.position[:, d] -= shift
-            es = shift[e.owner]
-            if not self._spheres_only:
-                e.position[:, d] -= es
-            e.reference[:, d] -= es
 
     def add_inlet(self, region: Region, material: Material, **params: Any) -> Inlet:
         """Insert particles during the run (:class:`dpm.flow.Inlet`: ``rate`` or
@@ -327,142 +298,40 @@ class Simulation:
     def remove_particles(self, ids: np.ndarray | Sequence[int]) -> dict[str, np.ndarray]:
         """Remove the bodies with these ids now; return their records (id, time, mass,
         residence_time, position, velocity). Contact history of the others is kept."""
-        b, e = self.bodies, self.elements
-        gone = np.isin(b.id, np.asarray(ids, np.int64))
-        rec = {"id": b.id[gone].copy(), "time": np.full(int(gone.sum()), self.time),
-               "mass": b.mass[gone].copy(), "residence_time": self.time - b.birth[gone],
-               "position": b.position[gone].copy(), "velocity": b.velocity[gone].copy()}
-        if not np.any(gone):
-            return rec
-        keep_b = ~gone
-        keep_e = keep_b[e.owner]
-        new_b = np.cumsum(keep_b) - 1
-        new_e = np.cumsum(keep_e) - 1
+        return population.remove_bodies(self, ids)
+
+
+
+    def permute(self, order: np.ndarray | Sequence[int]) -> None:
+        """Reorder the bodies: row k becomes the body that was row ``order[k]``.
+
+        Every container follows: elements (with their rebuild references, so no rebuild is
+        needed), both contact lists with each contact's history and flag (a pair stored
+        the other way round has its vector history negated), the integrator's state. Ids
+        do not change. The physics is the same; only the order in which a body's forces
+        are summed can change, by rounding (``tests/test_permute.py``)."""
+        n = len(self.bodies)
+        order = np.asarray(order)
+        if (order.shape != (n,) or order.dtype.kind not in "iu"
+                or not np.array_equal(np.sort(order), np.arange(n))):
+            raise ParameterError(f"sim.permute(): order must be a permutation of the {n} "
+                                 f"body rows (integers 0..{n - 1}, each once)")
+        if self.integrator.implicit and self._prepared:
+            raise ParameterError(f"sim.permute(): the {self.integrator.name} integrator keeps "
+                                 "its own contact state; permute before the first run")
+        order = order.astype(np.int64)
+        new_body = np.empty(n, np.int64)
+        new_body[order] = np.arange(n)
+        elem_order = self.bodies.permute(order)
+        new_elem = np.empty(len(elem_order), np.int64)
+        new_elem[elem_order] = np.arange(len(elem_order))
+        self.elements.permute(elem_order, new_body)
         if self._prepared:
-            self.contacts.keep_rows(keep_e, new_e, True)
-            self.wall_contacts.keep_rows(keep_e, new_e, False)
-            self._aux = np.ascontiguousarray(self._aux[keep_b])
-        b.keep(keep_b)
-        e.keep(keep_e, new_b)
-        if self._prepared:
-            self._population_changed()
-        return rec
-
-    def _population_changed(self) -> None:
-        """After bodies were inserted or removed during a run: resize the per-element
-        arrays (keeping the contact lists and their history), rebuild, recompute forces."""
-        b, e = self.bodies, self.elements
-        n_el = len(e)
-        self._spheres_only = bool(len(e) == len(b) and np.all(e.offset == 0.0)
-                                  and np.array_equal(e.owner, np.arange(len(b))))
-        self._sync_form()
-        if self._spheres_only:
-            _share_sphere_arrays(b, e)
-        elif len(b):
-            self._module.update_element_positions(b.position, b.orientation, b.element_start,
-                                                  e.offset, e.position)
-        self.contacts.resize_rows(n_el)
-        self.wall_contacts.resize_rows(n_el)
-        self._e_worst = np.zeros(n_el)
-        self._e_count = np.zeros(n_el, np.int32)
-        self._vf = np.zeros((len(b), 3))
-        self._wf = np.zeros((len(b), 3))
-        if len(self._aux) < len(b):
-            extra = np.zeros((len(b) - len(self._aux), self._aux.shape[1]))
-            self._aux = np.ascontiguousarray(np.concatenate([self._aux, extra]))
-        e.reference = np.full((n_el, 3), np.inf)
-        self._rebuild()
-        self._prime_forces()
-        self._update_boundary_loads()
-        self._prepared = True
-
-    def _flow_event(self) -> None:
-        """Outlets, then inlets, at the current time."""
-        hooks = self._registry.manager.hook
-        changed = False
-        prepared = self._prepared
-        for outlet in self.outlets:
-            if len(self.bodies) == 0:
-                break
-            sel = outlet.select(self.bodies.position)
-            if np.any(sel):
-                rec = self.remove_particles(self.bodies.id[sel])
-                outlet.record(rec)
-                if self._writer is not None:
-                    self._writer.write_removed(rec, self.outlets.index(outlet))
-                hooks.dpm_on_particles_removed(sim=self, outlet=outlet, records=rec)
-        for inlet in self.inlets:
-            ids = self._insert(inlet)
-            if len(ids):
-                changed = True
-                hooks.dpm_on_particles_inserted(sim=self, inlet=inlet, ids=ids)
-        if changed and prepared:
-            self._population_changed()
-
-    def _insert(self, inlet: Inlet) -> np.ndarray:
-        """Place what ``inlet`` owes now; return the new ids."""
-        from scipy.spatial import cKDTree
-
-        from .kernels.boundary_search import boundary_gaps
-
-        owed = inlet.owed(self.time + inlet.every)  # what the coming interval brings
-        by_mass = inlet.mass_rate is not None
-        if (owed < 1.0 and not by_mass) or owed <= 0.0:
-            return np.zeros(0, np.int64)
-        b = self.bodies
-        tree = cKDTree(b.position) if len(b) else None
-        rmax = float(b.radius.max()) if len(b) else 0.0
-        if self.walls is None or len(self.walls.frame) != len(self.boundaries):
-            table = BoundaryTable(self.boundaries, lambda m: self._material_index(m, ""), 1.0)
-            for k, bd in enumerate(self.boundaries):
-                table.frame[k] = frames(bd.motion, np.array([self.time]))[0]
-        else:
-            table = self.walls
-        placed_pos: list[np.ndarray] = []
-        placed_r: list[float] = []
-        new_ids = []
-        while (owed >= 1.0) if not by_mass else (owed > 0.0):
-            name, params = inlet.draw()
-            cls = self._registry.lookup("shape", name, "sim.add_inlet()")
-            sh = cls(call="sim.add_inlet()", **params)
-            batch = sh.build(1, inlet.material.density)
-            rb = float(batch.bounding_radius[0])
-            cand = inlet.region.sample(inlet.rng, inlet.max_attempts, rb)
-            ok = np.ones(len(cand), bool)
-            if tree is not None:
-                for k, hits in enumerate(tree.query_ball_point(cand, rb + rmax)):
-                    if hits:
-                        d = np.linalg.norm(b.position[hits] - cand[k], axis=1)
-                        ok[k] = bool(np.all(d >= rb + b.radius[hits]))
-            if placed_pos:
-                pp = np.asarray(placed_pos)
-                d = np.linalg.norm(cand[:, None, :] - pp[None], axis=2)
-                ok &= np.all(d >= rb + np.asarray(placed_r)[None], axis=1)
-            pick = -1
-            for k in np.flatnonzero(ok):  # the first candidate clear of every boundary
-                if len(table.kind) == 0 or boundary_gaps(
-                        cand[k:k + 1], np.array([rb]), table.frame, table.kind, table.par,
-                        table.owner)[0] >= 0.0:
-                    pick = int(k)
-                    break
-            if pick < 0:
-                break  # the region is full for now: the rest stays owed
-            p = cand[pick]
-            q = (random_quaternions(inlet.rng, 1) if inlet.random_orientation
-                 else np.array([[1.0, 0, 0, 0]]))
-            ids = self.add_particles(sh, inlet.material, positions=p[None],
-                                     velocities=inlet.velocity[None], orientations=q)
-            new_ids.append(ids)
-            placed_pos.append(p)
-            placed_r.append(rb)
-            m = float(batch.mass[0])
-            owed -= m if by_mass else 1.0
-            inlet.inserted += 1
-            inlet.inserted_mass += m
-        inlet._due = owed
-        out = np.concatenate(new_ids) if new_ids else np.zeros(0, np.int64)
-        inlet.ids.append(out)
-        return out
+            self.contacts.permute(new_elem)
+            self.wall_contacts.permute(new_elem)
+            self.backend.permute_bodies(order)
+            if self.plan.spheres_only:
+                population.share_sphere_arrays(self)
 
     def output(self, path: str, every: float | None = None,
                every_steps: int | None = None) -> None:
@@ -492,139 +361,16 @@ class Simulation:
             self._writer = None
 
     # ----------------------------------------------------------------- checks
+
+    # ----------------------------------------------------------------- checks
     def time_step_report(self) -> TimeStepReport:
         """Rayleigh step and shortest contact duration of the current scene."""
-        b = self.bodies
-        er = self.elements.radius
-        speed = float(np.max(np.linalg.norm(b.velocity, axis=1), initial=0.0))
-        g = float(np.linalg.norm(self.gravity))
-        if g > 0 and len(b):
-            h = float(np.ptp(b.position @ (self.gravity / g))) + 2 * float(b.radius.max())
-            speed = max(speed, math.sqrt(2 * g * h))
-        speed = max(speed, 1e-3)
-        rayleigh = None
-        tc, pair = None, ""
-        present = sorted(set(int(m) for m in b.material))
-        wall_mats = sorted({self._material_index(x.material, "") for x in self.boundaries})
-        for ia in present:
-            rmin_a = float(er[self.elements.material == ia].min())
-            mmin_a = float(b.mass[b.material == ia].min())
-            for ib in sorted(set(present) | set(wall_mats)):
-                law = self._contacts.get((ia, ib))
-                if law is None:
-                    continue
-                ma, mb = self.materials[ia], self.materials[ib]
-                if ib in present:
-                    rmin_b = float(er[self.elements.material == ib].min())
-                    mmin_b = float(b.mass[b.material == ib].min())
-                    meff = mmin_a * mmin_b / (mmin_a + mmin_b)
-                    reff = rmin_a * rmin_b / (rmin_a + rmin_b)
-                    t = law.contact_time(ma, mb, meff, reff, speed)
-                    if tc is None or t < tc:
-                        tc, pair = t, f"{ma.name}-{mb.name}"
-                if ib in wall_mats:
-                    t = law.contact_time(ma, mb, mmin_a, rmin_a, speed)
-                    if tc is None or t < tc:
-                        tc, pair = t, f"{ma.name}-wall {mb.name}"
-                if law.needs_elastic_constants:
-                    r = ma.rayleigh_time_step(rmin_a)
-                    if r is not None and (rayleigh is None or r < rayleigh):
-                        rayleigh = r
-        return TimeStepReport(self.dt, rayleigh, tc, speed, pair,
-                              self.integrator.min_steps_per_contact)
-
-    def _smallest_pair(self, ia: int, ib: int) -> tuple[float, float]:
-        """(m*, R*) of the smallest bodies of materials ia and ib (a wall material alone
-        counts as an infinitely large, heavy body)."""
-        b, e = self.bodies, self.elements
-
-        def small(k: int) -> tuple[float, float]:
-            sel = b.material == k
-            if not np.any(sel):
-                return math.inf, math.inf
-            return float(b.mass[sel].min()), float(e.radius[e.material == k].min())
-
-        (ma, ra), (mb, rb) = small(ia), small(ib)
-        meff = ma if math.isinf(mb) else mb if math.isinf(ma) else ma * mb / (ma + mb)
-        reff = ra if math.isinf(rb) else rb if math.isinf(ra) else ra * rb / (ra + rb)
-        return meff, reff
-
-    def _validate_scene(self) -> None:
-        problems: list[str] = []
-        b = self.bodies
-        if len(b) == 0:
-            problems.append("the scene has no particles (sim.add_particles)")
-        for name in ("position", "velocity", "angular_velocity", "orientation"):
-            arr = getattr(b, name)
-            bad = ~np.all(np.isfinite(arr), axis=1)
-            if np.any(bad):
-                problems.append(f"{name} is NaN or inf for particle id(s) "
-                                f"{_few(b.id[bad])}")
-        # every material pair that can meet needs a contact law
-        present = sorted(set(int(m) for m in b.material))
-        missing = []
-        for i, ia in enumerate(present):
-            for ib in present[i:]:
-                if (ia, ib) not in self._contacts:
-                    missing.append(f"{self.materials[ia].name}-{self.materials[ib].name}")
-            for bd in self.boundaries:
-                ib = self._material_index(bd.material, "")
-                if (ia, ib) not in self._contacts:
-                    pair = f"{self.materials[ia].name}-{bd.material.name} ({bd.name})"
-                    if pair not in missing:
-                        missing.append(pair)
-        if missing:
-            problems.append("no contact law for material pair(s) " + ", ".join(missing)
-                            + "; set them with sim.contact(a, b, model=..., ...)")
-        # particles outside a boundary
-        if len(b):
-            for k, bd in enumerate(self.boundaries):
-                out = bd.outside(b.position, b.radius)
-                if np.any(out):
-                    problems.append(f"{int(out.sum())} particle(s) lie outside boundary {k} "
-                                    f"({bd.name}): id(s) {_few(b.id[out])}")
-        if problems:
-            raise SceneError("scene check before the first step:\n  " + "\n  ".join(problems))
-
-    def _check_initial_overlaps(self) -> None:
-        """Refuse overlaps beyond ``overlap_tolerance`` (of the smaller radius) between
-        particles and between particles and boundaries, all listed in one error."""
-        e, b, tol = self.elements, self.bodies, self.overlap_tolerance
-        problems = []
-        pairs = self.contacts.count
-        if pairs:
-            c = self.contacts
-            ratio = self._module.pair_overlaps(e.position, e.radius, c.start, c.key,
-                                               self.period)
-            k = int(np.argmax(ratio))
-            if ratio[k] > tol:
-                i = int(np.searchsorted(c.start, k, side="right") - 1)
-                j = int(c.key[k])
-                problems.append(
-                    f"{int(np.sum(ratio > tol))} particle pair(s) overlap more than "
-                    f"overlap_tolerance={tol:g} of the smaller radius; worst: particles "
-                    f"{b.id[e.owner[i]]} and {b.id[e.owner[j]]} overlap by "
-                    f"{ratio[k]:.3g} of the radius")
-        wc, w = self.wall_contacts, self.walls
-        if wc.count:
-            i = np.repeat(np.arange(len(e)), np.diff(wc.start))
-            p = wc.key[:wc.count]
-            ratio = self._module.entry_overlaps(e.position, e.radius, wc.start, wc.key,
-                                                w.kind, w.par, w.owner, w.frame)
-            k = int(np.argmax(ratio))
-            if ratio[k] > tol:
-                bd = self.boundaries[w.owner[p[k]]]
-                problems.append(
-                    f"{int(np.sum(ratio > tol))} particle(s) overlap a boundary more than "
-                    f"overlap_tolerance={tol:g} of the radius; worst: particle "
-                    f"{b.id[e.owner[i[k]]]} overlaps boundary {int(w.owner[p[k]])} ({bd.name}) "
-                    f"by {ratio[k]:.3g} of its radius")
-        if problems:
-            raise SceneError("initial overlap: " + "; ".join(problems))
+        return scene_report(self)
 
     def _prepare(self) -> None:
-        """Validate the scene, pack the tables, pick and compile the step kernels."""
-        self._validate_scene()
+        """Validate the scene, plan it (tables, history layout, boundary kinds, step
+        module) and hand it to the backend."""
+        scene_check.validate_scene(self)
         report = self.time_step_report()
         if self._auto_dt and not self.dt > 0:
             self.dt = report.auto()
@@ -636,117 +382,34 @@ class Simulation:
         if self.dt_check != "off":
             for w in (refuse + warn):
                 warnings.warn(w, stacklevel=3)
-        # material-pair tables: one law index per distinct model class
-        nm = len(self.materials)
-        laws: list[tuple[str, str]] = []
-        self._pair_model = np.zeros((nm, nm), np.int64)
-        self._pair_params = np.zeros((nm, nm, 8))
-        for (ia, ib), law in self._contacts.items():
-            if law.kernel not in laws:
-                laws.append(law.kernel)
-            self._pair_model[ia, ib] = laws.index(law.kernel)
-            ctx = PairContext(report.impact_speed, *self._smallest_pair(ia, ib))
-            self._pair_params[ia, ib] = law.pair_row(self.materials[ia], self.materials[ib],
-                                                     ctx)
-        # history floats per contact: the widest the laws use (3-5: the rolling spring)
-        width = max([law.history_slots for law in self._contacts.values()] + [3])
-        if np.any(self._pair_params[:, :, 6] != 0.0):
-            width = max(width, 6)
-        self.contacts.set_history_width(width)
-        self.wall_contacts.set_history_width(width)
-        n_el = len(self.elements)
+        laws, pair_model, pair_params, width = _plan.pair_tables(
+            self.materials, self._contacts,
+            lambda a, b: PairContext(report.impact_speed, *smallest_pair(self, a, b)))
         if self.skin is None:
             self.skin = 0.4 * float(self.elements.radius.min())
         # boundaries: pipe joints, primitives, frames, search grids
         self._join_pipe_ends()
         self.walls = BoundaryTable(self.boundaries, lambda m: self._material_index(m, ""),
                                    float(self.elements.radius.max()) + self.skin)
-        self._moving = any(bd.motion is not None for bd in self.boundaries)
-        e, b = self.elements, self.bodies
-        # every body one sphere at its centre: the element positions are the body positions
-        self._spheres_only = bool(len(e) == len(b) and np.all(e.offset == 0.0)
-                                  and np.array_equal(e.owner, np.arange(len(b))))
-        if self._spheres_only:
-            _share_sphere_arrays(b, e)
-        self._plan_args = (laws, self.integrator.kernel_module,
-                           sorted(set(self.walls.kind.tolist())),
-                           bool(np.any(self.period[3:] > 0)))
-        self._module = None
-        self._sync_form()
-        self._check_period()
+        spheres = population.spheres_only(self)
+        if spheres:  # every body one sphere at its centre: element positions are the bodies'
+            population.share_sphere_arrays(self)
+        periodic = bool(np.any(self.period[3:] > 0))
+        self.plan = _plan.ScenePlan(
+            laws, pair_model, pair_params, width, self.integrator.kernel_module,
+            sorted(set(self.walls.kind.tolist())), periodic,
+            any(bd.motion is not None for bd in self.boundaries), spheres)
+        scene_check.check_period(self)
         self._set_frames()
-        if len(self.contacts.start) != n_el + 1:
-            self.contacts.reset(n_el, 4 * n_el)  # grows on demand
-            self.wall_contacts.reset(n_el, n_el // 4 + 16)
-        self._e_worst = np.zeros(n_el)
-        self._vf = np.zeros((len(b), 3))  # velocities the forces see (set by the integrator)
-        self._wf = np.zeros((len(b), 3))
-        self._aux = np.zeros((len(b), self.integrator.aux_columns))
-        self._e_count = np.zeros(n_el, np.int32)
-        if not self._spheres_only:
-            self._module.update_element_positions(b.position, b.orientation, b.element_start,
-                                                  e.offset, e.position)
-        if np.any(self.period[3:] > 0):
-            self._wrap_periodic()
-        self._rebuild()
-        self._check_initial_overlaps()
+        self.backend.attach(self)
+        if periodic:
+            population.wrap_periodic(self)
+        self.backend.rebuild()
+        scene_check.check_initial_overlaps(self)
         self._prepared = True
 
-    def _rebuild(self) -> None:
-        e, c, wc, _w = self.elements, self.contacts, self.wall_contacts, self.walls
-        d = self._diag
-        while True:
-            d[0] = STATUS_OK
-            self._module.rebuild(self.skin, e.owner, e.radius, e.position, e.reference,
-                                 c.start, c.key, c.history, c.active, c.t_start, c.t_pair,
-                                 wc.start, wc.key, wc.history, wc.active, self._bnd(), d)
-            if d[0] == STATUS_OVERFLOW:
-                c.grow(int(d[3]))
-            elif d[0] == STATUS_WALL_OVERFLOW:
-                wc.grow(int(d[3]))
-            else:
-                break
-        self.rebuild_count += int(d[2])
-        d[2] = 0
-        c.force[:c.count] = 0.0  # rows of the new lists: the contact pass fills touching ones
-        wc.force[:wc.count] = 0.0
-
-    def _args(self) -> tuple:
-        """Arguments of ``run_steps``/``finish_step`` after ``dt`` (see kernels/step.py)."""
-        b, e, c, wc, _w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
-        return (self.gravity, self.skin, self.max_overlap, not self._spheres_only,
-                self._fused(), self._spheres_only and not self.sphere_orientation,
-                b.position, b.velocity, b.orientation, b.angular_velocity, b.force, b.torque,
-                b.mass, b.invmass, b.invinertia, self._vf, self._wf, self._aux, b.element_start,
-                e.owner,
-                e.offset, e.radius,
-                e.material, e.position, e.reference, c.start, c.key, c.history, c.active,
-                c.force, c.t_start, c.t_pair, wc.start, wc.key, wc.history, wc.active,
-                wc.force, wc.tag, self._bnd(),
-                self._pair_model, self._pair_params, self._e_worst, self._e_count, self._diag)
-
-    def _sync_form(self) -> None:
-        """Load the step module of the force pass the scene needs: the fused pass when
-        every body is a single sphere, else the two-pass sum (``FUSED``, a constant of the
-        generated module, so that a scene compiles one form only)."""
-        want = self._spheres_only and not self._two_pass
-        if self._module is None or self._module.FUSED != want:
-            self._module = _plan.step_module(*self._plan_args, fused=want)
-
-    def _fused(self) -> int:
-        """The number of chunks (one per thread) if the step sums forces as it computes
-        them (kernels/step.py ``fused_pass``); 0 for the two-pass form. The sums are bit
-        for bit the same; the fused pass leaves the rows of most pairs stale, so those are
-        zeroed when the two-pass form takes over again."""
-        fused = numba.get_num_threads() if self._module.FUSED else 0
-        # rows: the two-pass sum, and the fused pass's pairs across chunks
-        self.contacts.use_rows(fused != 1)
-        if not fused and self._rows_stale:
-            self.contacts.force[:] = 0.0
-        self._rows_stale = bool(fused)
-        return fused
-
     def _join_pipe_ends(self) -> None:
+
         """Mark open ends of tubes and bends that meet another piece's open end (same
         centre, opposite outward direction, same radius, same motion object) as joined."""
         ends = []
@@ -765,46 +428,24 @@ class Simulation:
                     b1.joined.add(n1)
                     b2.joined.add(n2)
 
-    def _bnd(self) -> tuple:
-        """The boundary arrays the kernels take as one tuple (see kernels/step.py)."""
-        w = self.walls
-        return (w.kind, w.par, w.owner, w.material, w.ids, w.frame, w.frame_ref, w.extent,
-                w.load, w.grid_int, w.grid_flt, w.cell_start, w.cell_items, w.prim_cells,
-                self.period)
 
     def _set_frames(self) -> None:
         """Boundary frames at the current time."""
         for k, bd in enumerate(self.boundaries):
             self.walls.frame[k] = frames(bd.motion, np.array([self.time]))[0]
-            bd._time = self.time
+            bd.load_time = self.time
 
     def _frame_table(self, n: int, step: int) -> np.ndarray:
         """Frames of moving boundaries at the ends of the n steps after ``step`` (empty if
         none moves)."""
         nb = len(self.boundaries)
-        if not self._moving:
+        if not self.plan.moving:
             return np.zeros((0, nb, 18))
         t = (step + 1 + np.arange(n)) * self.dt
         table = np.empty((n, nb, 18))
         for k, bd in enumerate(self.boundaries):
             table[:, k] = frames(bd.motion, t)
         return table
-
-    def _prime_forces(self) -> None:
-        """Forces of the current state without advancing contact history (dt = 0)."""
-        b, e, c, wc, _w = self.bodies, self.elements, self.contacts, self.wall_contacts, self.walls
-        self._vf[:] = b.velocity
-        self._wf[:] = b.angular_velocity
-        self._module.compute_forces(
-            0.0, False, self._fused(), self.gravity, b.position, b.velocity, b.orientation,
-            b.angular_velocity,
-            b.force, b.torque, b.mass, b.invmass, b.invinertia, self._vf, self._wf, self._aux,
-            b.element_start, e.owner,
-            e.radius, e.material, e.position,
-            c.start, c.key, c.history, c.active, c.force, c.t_start, c.t_pair, wc.start,
-            wc.key, wc.history, wc.active, wc.force, wc.tag, self._bnd(), self._pair_model,
-            self._pair_params, self._e_worst, self._e_count, self._diag)
-        self._forces_valid = True
 
     # ----------------------------------------------------------------- running
     def run(self, steps: int | None = None, until: float | None = None,
@@ -814,6 +455,22 @@ class Simulation:
         Shows a progress bar (simulated time, steps/s, ETA) when ``progress`` is True, or
         when None and standard error is a terminal. Raises :class:`UnstableRunError` with a
         diagnosis if the run goes unstable; frames written so far stay readable.
+
+        Before the first step (and after the scene changed): an inlet may fill an empty
+        scene; the scene is checked (every problem in one error), planned and handed to
+        the backend; forces of the start state are computed (dt = 0) and the integrator
+        started; the output file is created with the start state as its first frame.
+
+        Each step, in the backend (:mod:`dpm.backends.base`): integrator pre-force part,
+        element positions, neighbour lists rebuilt when an element moved more than
+        skin/2, gravity and contact forces, integrator post-force part.
+
+        Between kernel calls, in this order: ``dpm_after_step`` hooks (when any hook runs
+        per step, every call is one step, with ``dpm_before_step`` before it); the
+        periodic wrap, boundary loads, the instability checks (NaN, overlap beyond
+        ``max_overlap``, tunnelling speed); the flow event (outlets remove, then inlets
+        insert) when its interval is due; an output frame (then ``dpm_on_output``) when
+        due. Calls are as long as these events allow, aiming at ~0.1 s each.
         """
         if (steps is None) == (until is None):
             raise ParameterError("sim.run(): give exactly one of steps or until")
@@ -824,28 +481,25 @@ class Simulation:
                      {"until": until})
         if not self._prepared:
             if self.inlets and self.step_count == 0 and not self._forces_valid:
-                self._flow_event()  # an inlet may fill an empty scene
+                population.flow_event(self)  # an inlet may fill an empty scene
             self._prepare()
         if steps is not None:
             nsteps = int(steps)
         else:
             nsteps = max(0, math.ceil((until - self.time) / self.dt - 1e-9))
         threads_before = numba.get_num_threads()
-        if self.threads is not None:
-            numba.set_num_threads(self.threads)
-        elif len(self.elements) < SMALL_SCENE:
-            numba.set_num_threads(1)
-        else:
-            numba.set_num_threads(_default_threads())
+        numba.set_num_threads(self.backend.thread_count(len(self.elements)))
         try:
             self._run(nsteps, progress)
         finally:
             numba.set_num_threads(threads_before)
 
+
     def _run(self, nsteps: int, progress: bool | None) -> None:
-        self._sync_form()
+        self.backend.sync_form()
         if not self._forces_valid:
-            self._prime_forces()
+            self.backend.prime()
+            self._forces_valid = True
             self._update_boundary_loads()
             self.integrator.start(self)
         from .progress import Progress
@@ -884,7 +538,7 @@ class Simulation:
                 if per_step_hooks:
                     hooks.dpm_after_step(sim=self)
                 if flow_every and self.step_count % flow_every == 0:
-                    self._flow_event()
+                    population.flow_event(self)
                 if self._writer is not None and self.step_count % self._output_every == 0:
                     self._write_frame()
                 bar.update(ran, self.time)
@@ -900,134 +554,59 @@ class Simulation:
             if self._writer is not None:
                 self._writer.flush()
 
+
     def _advance(self, n: int) -> int:
-        """Run ``n`` steps in as few kernel calls as possible; diagnose a failure."""
-        d = self._diag
+        """Run ``n`` steps in as few backend calls as possible; diagnose a failure."""
         total = 0
+        res = StepResult(0)
         while total < n:
             if self.integrator.implicit:
+                d = self.backend.diag
                 d[0] = STATUS_OK
                 d[1] = self.integrator.advance(self, n - total)
+                res = StepResult(int(d[1]), int(d[0]), int(d[2]), float(d[4]), int(d[5]))
+                d[2] = 0
             else:
                 m = n - total
-                if self._moving:
+                if self.plan.moving:
                     m = min(m, MOVING_CHUNK)
-                table = self._frame_table(m, self.step_count + total)
-                self._module.run_steps(m, self.dt, *self._args(), table)
-            ran = int(d[1])
-            if d[0] in (STATUS_OVERFLOW, STATUS_WALL_OVERFLOW):
-                # stopped after begin_step: grow, then finish that step
-                while d[0] in (STATUS_OVERFLOW, STATUS_WALL_OVERFLOW):
-                    (self.contacts if d[0] == STATUS_OVERFLOW else self.wall_contacts).grow(
-                        int(d[3]))
-                    d[0] = STATUS_OK
-                    self._module.finish_step(self.dt, *self._args())
-                if d[0] in (STATUS_OK, STATUS_OVERLAP):
-                    ran += 1
-            total += ran
-            if d[0] != STATUS_OK:
+                res = self.backend.advance(m, self.dt,
+                                           self._frame_table(m, self.step_count + total))
+            total += res.steps
+            self.rebuild_count += res.rebuilds
+            if res.status != STATUS_OK:
                 break
         self.step_count += total
         self.time = self.step_count * self.dt
-        if np.any(self.period[3:] > 0):
-            self._wrap_periodic()
-        self.rebuild_count += int(d[2])
-        d[2] = 0
+        if self.plan.periodic:
+            population.wrap_periodic(self)
         self._update_boundary_loads()
-        if d[0] == STATUS_NAN:
+        if res.status == STATUS_NAN:
             self._fail("a position became NaN")
-        if d[0] == STATUS_OVERLAP:
-            self._fail(f"an overlap reached {d[4]:.3g} of the radius (max_overlap="
-                       f"{self.max_overlap:g}){self._where(int(d[5]))}")
-        self._check_speeds()
+        if res.status == STATUS_OVERLAP:
+            self._fail(f"an overlap reached {res.worst_overlap:.3g} of the radius "
+                       f"(max_overlap={self.max_overlap:g})"
+                       f"{diagnosis.locate(self, res.worst_element)}")
+        if self.speed_guard:
+            self._check_cost = diagnosis.check_speeds(self)
         return total
 
-    def _where(self, el: int) -> str:
-        """Which body element ``el`` belongs to, where it is and what it touches."""
-        e, b = self.elements, self.bodies
-        if not 0 <= el < len(e):
-            return ""
-        k = int(e.owner[el])
-        touching = []
-        wc, c = self.wall_contacts, self.contacts
-        for q in range(int(wc.start[el]), int(wc.start[el + 1])):
-            if wc.active[q]:
-                bi = int(self.walls.owner[wc.key[q]])
-                touching.append(f"boundary {bi} ({self.boundaries[bi].name})")
-        for kk in range(int(c.start[el]), int(c.start[el + 1])):
-            if c.active[kk]:
-                touching.append(f"particle {b.id[e.owner[c.key[kk]]]}")
-        for kk in np.flatnonzero(c.key[:c.count] == el):  # pairs where it is second
-            if c.active[kk]:
-                i = int(np.searchsorted(c.start, kk, side="right") - 1)
-                touching.append(f"particle {b.id[e.owner[i]]}")
-        p = b.position[k]
-        v = float(np.linalg.norm(b.velocity[k]))
-        return (f" at particle {b.id[k]} (position ({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m, "
-                f"speed {v:.3g} m/s, touching {', '.join(touching[:6]) or 'nothing now'})")
-
-    def _check_speeds(self) -> None:
-        b = self.bodies
-        if len(b) == 0:
-            return
-        # the fastest body, in blocks (no temporary of the population's size: at 1e6
-        # spheres this check had set the run's peak memory); the columns one by one
-        # (einsum over rows of 3 took 6.3 ms per 1e6 bodies, this 3.8 ms)
-        t0 = _time.perf_counter()
-        k, v2 = 0, -1.0
-        for first in range(0, len(b), SPEED_BLOCK):
-            vb = b.velocity[first:first + SPEED_BLOCK]
-            sq = vb[:, 0] * vb[:, 0]
-            sq += vb[:, 1] * vb[:, 1]
-            sq += vb[:, 2] * vb[:, 2]
-            j = int(np.argmax(sq))  # (the first NaN, if any)
-            if not sq[j] <= v2:
-                k, v2 = first + j, float(sq[j])
-                if not math.isfinite(v2):
-                    self._fail("a velocity became NaN or inf")
-        speed = math.sqrt(v2)
-        if speed * self.dt > 0.5 * b.radius[k]:
-            self._fail(f"particle {b.id[k]} moves {speed * self.dt:.3g} m per step, more "
-                       f"than half its radius {b.radius[k]:.3g} m (speed {speed:.3g} m/s): "
-                       "contacts would be missed (tunnelling) or start at unresolved "
-                       f"overlaps; dt must stay below {0.5 * b.radius[k] / speed:.3g} s at this "
-                       "speed")
-        self._check_cost = _time.perf_counter() - t0
-
     def _fail(self, what: str) -> None:
-        rep = self.time_step_report() if np.all(np.isfinite(self.bodies.velocity)) else None
-        hint = ""
-        if rep is not None and rep.contact_time is not None:
-            hint = (f"; shortest contact {rep.contact_time:.3g} s = "
-                    f"{rep.steps_per_contact:.3g} steps")
-        if rep is not None and rep.rayleigh is not None:
-            hint += f"; Rayleigh step {rep.rayleigh:.3g} s"
-        written = ""
-        w = self._writer
-        if w is not None:
-            w.flush()
-            written = f"; {w.frames} frame(s) written to {w.path} stay readable"
-        self.close()
-        raise UnstableRunError(
-            f"unstable run at step {self.step_count} (t = {self.time:.6g} s): {what}. "
-            f"dt = {self.dt:g} s{hint}. Reduce dt, raise the damping or check the "
-            f"stiffness{written}")
+        raise diagnosis.unstable(self, what)
 
     def _update_boundary_loads(self) -> None:
         w = self.walls
+        loads = None if w is None else self.backend.boundary_loads()
         for k, bd in enumerate(self.boundaries):
             if w is None:
-                bd.force = np.zeros(3)
-                bd.torque = np.zeros(3)
+                bd.record_load(self.time, np.zeros(3), np.zeros(3), bd.velocity,
+                               bd.angular_velocity)
                 continue
-            f = w.load[k, :3].copy()
+            f = loads[k, :3].copy()
             # torque about the frame origin o -> about the torque point c
             o = w.frame[k, :3]
-            bd.force = f
-            bd.torque = w.load[k, 3:6] + np.cross(o - bd.torque_point, f)
-            bd.velocity = w.frame[k, 12:15].copy()
-            bd.angular_velocity = w.frame[k, 15:18].copy()
-            bd._time = self.time
+            bd.record_load(self.time, f, loads[k, 3:6] + np.cross(o - bd.torque_point, f),
+                           w.frame[k, 12:15].copy(), w.frame[k, 15:18].copy())
 
     def _write_frame(self) -> None:
         self._writer.write(self)
@@ -1037,73 +616,37 @@ class Simulation:
     # ----------------------------------------------------------------- measures
     def kinetic_energy(self) -> float:
         """Translational plus rotational kinetic energy [J] (principal frame)."""
-        b = self.bodies
-        trans = 0.5 * np.sum(b.mass * np.einsum("ij,ij->i", b.velocity, b.velocity))
-        w_body = _to_body(b.orientation, b.angular_velocity)
-        rot = 0.5 * np.sum(b.inertia * w_body**2)
-        return float(trans + rot)
+        return _measures.kinetic_energy(self.bodies)
 
     def momentum(self) -> np.ndarray:
         """Total linear momentum [kg m/s]."""
-        return (self.bodies.mass[:, None] * self.bodies.velocity).sum(axis=0)
+        return _measures.momentum(self.bodies)
 
     def angular_momentum(self) -> np.ndarray:
         """Total angular momentum about the origin [kg m2/s]: sum m x cross v + R I R^T w."""
-        b = self.bodies
-        spin_body = b.inertia * _to_body(b.orientation, b.angular_velocity)
-        spin = _to_body(b.orientation * np.array([1.0, -1.0, -1.0, -1.0]), spin_body)
-        orbital = np.cross(b.position, b.mass[:, None] * b.velocity)
-        return (orbital + spin).sum(axis=0)
+        return _measures.angular_momentum(self.bodies)
 
+    def contact_count(self) -> int:
+        """Touching contacts (particle pairs and particle-boundary) of the last step."""
+        return self.backend.contact_count()
 
-def _default_threads() -> int:
-    value = os.environ.get("DPM_THREADS", "1")
-    if value == "all":
-        return numba.config.NUMBA_NUM_THREADS
-    try:
-        n = int(value)
-    except ValueError:
-        raise ParameterError(f"DPM_THREADS={value!r} is not an integer or 'all'") from None
-    if not 1 <= n <= numba.config.NUMBA_NUM_THREADS:
-        raise ParameterError(f"DPM_THREADS={n} is outside [1, "
-                             f"{numba.config.NUMBA_NUM_THREADS}] (NUMBA_NUM_THREADS)")
-    return n
+    # ----------------------------------------------------------------- for integrators
+    # (the implicit integrators drive their own Newton loop on the host arrays)
+    @property
+    def _diag(self) -> np.ndarray:
+        return self.backend.diag
 
+    @property
+    def _aux(self) -> np.ndarray:
+        return self.backend.aux
 
-def _quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise Hamilton product a (x) b of (N, 4) quaternions (w, x, y, z)."""
-    a0, a1, a2, a3 = np.moveaxis(a, -1, 0)
-    b0, b1, b2, b3 = np.moveaxis(np.broadcast_to(b, a.shape), -1, 0)
-    return np.stack([a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
-                     a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-                     a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
-                     a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0], axis=-1)
+    @property
+    def _pair_model(self) -> np.ndarray:
+        return self.plan.pair_model
 
-
-def _to_body(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Rotate world vectors v into the body frames of quaternions q (R(q)^T v)."""
-    w, x, y, z = q.T
-    qv = np.stack([-x, -y, -z], axis=1)  # conjugate
-    t = 2.0 * np.cross(qv, v)
-    return v + w[:, None] * t + np.cross(qv, t)
-
-
-def _filled(n: int, value, dtype) -> np.ndarray:
-    """np.full(n, value), by np.zeros when value is 0: its pages then stay unmapped until
-    written, so a field that stays 0 (the material of a one-material scene, the birth time
-    of bodies placed at t = 0) costs no resident memory."""
-    return np.zeros(n, dtype) if value == 0 else np.full(n, value, dtype)
-
-
-def _share_sphere_arrays(b: Bodies, e: Elements) -> None:
-    """Every body a single sphere at its centre: its element's position, and its radius
-    and material where they agree (they do for built-in spheres), are the body's own
-    arrays, not copies (16 B per sphere less besides the position)."""
-    e.position = b.position
-    if np.array_equal(e.radius, b.radius):
-        e.radius = b.radius
-    if np.array_equal(e.material, b.material):
-        e.material = b.material
+    @property
+    def _pair_params(self) -> np.ndarray:
+        return self.plan.pair_params
 
 
 def _rows(call: str, name: str, value: Any, width: int, n: int | None = None) -> np.ndarray:
@@ -1121,7 +664,3 @@ def _rows(call: str, name: str, value: Any, width: int, n: int | None = None) ->
         raise ParameterError(f"{call}: {name} contains NaN or inf (row {row})")
     return np.ascontiguousarray(arr)
 
-
-def _few(ids: np.ndarray, k: int = 5) -> str:
-    s = ", ".join(str(int(i)) for i in ids[:k])
-    return s + (f", ... ({len(ids)} in all)" if len(ids) > k else "")

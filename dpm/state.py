@@ -31,9 +31,9 @@ class Bodies:
     id (n,) int64 unique and stable; position, velocity, angular_velocity, force, torque
     (n, 3); orientation (n, 4) unit quaternion (w, x, y, z), body frame = principal frame;
     mass (n,); inertia (n, 3) principal moments; invmass, invinertia (0 for fixed bodies);
-    material, shape (n,) int64 indices; radius (n,) bounding radius; birth (n,) time of
-    insertion [s]; element_start (n + 1,): the elements of body b are
-    element_start[b] : element_start[b + 1].
+    material, shape (n,) int64 indices (into ``sim.materials`` and ``sim.shape_names``);
+    radius (n,) bounding radius; birth (n,) time of insertion [s]; element_start (n + 1,):
+    the elements of body b are element_start[b] : element_start[b + 1].
     """
 
     #: every per-body array (one row per body)
@@ -72,6 +72,20 @@ class Bodies:
             setattr(self, name, np.ascontiguousarray(getattr(self, name)[mask]))
         self.element_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
 
+    def permute(self, order: np.ndarray) -> np.ndarray:
+        """Reorder the bodies: new body k is old body ``order[k]`` (a permutation). Each
+        body keeps its id, and its elements stay together in their order; returns the
+        element order (new element m is old element ``result[m]``)."""
+        order = np.asarray(order, np.int64)
+        counts = np.diff(self.element_start)
+        starts = self.element_start[:-1]
+        elem_order = np.repeat(starts[order] - np.cumsum(np.r_[0, counts[order][:-1]]),
+                               counts[order]) + np.arange(int(counts.sum()))
+        for name in self.ARRAYS:
+            setattr(self, name, np.ascontiguousarray(getattr(self, name)[order]))
+        self.element_start = np.concatenate([[0], np.cumsum(counts[order])]).astype(np.int64)
+        return elem_order
+
 
 class Elements:
     """Per-element arrays: owner body, body-frame offset, radius, world position, material."""
@@ -103,6 +117,18 @@ class Elements:
         for name in ("offset", "radius", "material", "position", "reference"):
             setattr(self, name, np.ascontiguousarray(getattr(self, name)[mask]))
 
+    def permute(self, order: np.ndarray, new_body: np.ndarray) -> None:
+        """Reorder the elements: new element m is old element ``order[m]``; ``new_body``
+        maps old body indices to new ones. (An element is known by its body's id and its
+        index within the body, which a permutation keeps.)"""
+        self.owner = np.ascontiguousarray(new_body[self.owner[order]])
+        for name in ("offset", "radius", "material", "position", "reference"):
+            setattr(self, name, np.ascontiguousarray(getattr(self, name)[order]))
+
+
+#: history slots 0..VECTOR_HISTORY-1 are vectors of element i relative to j (tangential and
+#: rolling springs): they change sign when a pair's order is reversed (:meth:`Contacts.permute`)
+VECTOR_HISTORY = 6
 
 #: partner keys and pair indices (element, primitive and pair numbers stay below 2**31):
 #: 4 bytes less per listed pair and per transposed entry than int64
@@ -195,6 +221,31 @@ class _CsrList:
         counts = np.bincount(new_index[rows[valid]], minlength=n_new)
         self.start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
 
+    def _rows_of(self) -> np.ndarray:
+        return np.repeat(np.arange(len(self.start) - 1), np.diff(self.start))
+
+    def _set_entries(self, rows: np.ndarray, keys: np.ndarray, hist: np.ndarray,
+                     act: np.ndarray, n_rows: int) -> None:
+        """The list as given (sorted by row, then key): keys, history, flags, CSR start;
+        force rows zeroed (the next force evaluation writes the touching ones)."""
+        m = len(keys)
+        self.key[:m] = keys
+        self.history[:m] = hist
+        self.active[:m] = act
+        self.force[:] = 0.0
+        self.start = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n_rows))]
+                                    ).astype(np.int64)
+
+    def permute(self, new_index: np.ndarray) -> None:
+        """Elements were reordered (old element i is now ``new_index[i]``): the rows move
+        with their elements, each entry keeps its key, history and flag."""
+        cnt = self.count
+        rows = new_index[self._rows_of()]
+        keys = self.key[:cnt]
+        o = np.lexsort((keys, rows))
+        self._set_entries(rows[o], keys[o], self.history[:cnt][o], self.active[:cnt][o],
+                          len(self.start) - 1)
+
     def grow(self, needed: int) -> None:
         """Enlarge the buffers to hold ``needed`` entries (with headroom); keep the list."""
         if needed > KEY_MAX:
@@ -249,6 +300,27 @@ class Contacts(_CsrList):
     def keep_rows(self, keep, new_index, remap_keys) -> None:
         super().keep_rows(keep, new_index, remap_keys)
         self.t_start = np.zeros(len(self.start), np.int64)
+
+    def permute(self, new_index: np.ndarray) -> None:
+        """Elements were reordered (old element i is now ``new_index[i]``): every pair
+        keeps its history and flag. A pair whose first element is now the larger index
+        is stored the other way round (the list holds j > i), and the vector slots of its
+        history (0-5: tangential and rolling springs, i relative to j) change sign; the
+        scalar slots (6-7, the normal law's state) stay."""
+        cnt = self.count
+        i = new_index[self._rows_of()]
+        j = new_index[self.key[:cnt]]
+        hist = self.history[:cnt].copy()
+        flip = i > j
+        hist[flip, :min(VECTOR_HISTORY, hist.shape[1])] *= -1.0
+        lo, hi = np.minimum(i, j), np.maximum(i, j)
+        o = np.lexsort((hi, lo))
+        self._set_entries(lo[o], hi[o], hist[o], self.active[:cnt][o], len(self.start) - 1)
+        if self.rows:  # the transposed index of the reordered list
+            keys = self.key[:cnt]
+            self.t_start[:] = 0
+            np.cumsum(np.bincount(keys, minlength=len(self.start) - 1), out=self.t_start[1:])
+            self.t_pair[:cnt] = np.argsort(keys, kind="stable")
 
     @property
     def pair_count(self) -> int:

@@ -87,7 +87,7 @@ def scene(gravity=(0, 0, -G), dt=2e-6, friction=0.5, restitution=0.3, fused=Fals
     a = dpm.Material("glass", **GLASS)
     w = dpm.Material("steel", **STEEL)
     sim = dpm.Simulation(dt=dt, gravity=gravity, dt_check="warn")
-    sim._two_pass = not fused
+    sim.backend.force_pass = "auto" if fused else "two_pass"
     sim.contact(a, a, model="hertz_mindlin", restitution=restitution, friction=friction, **law)
     sim.contact(a, w, model="hertz_mindlin", restitution=restitution, friction=friction, **law)
     return sim, a, w
@@ -526,7 +526,7 @@ def test_fused_pass_matches_two_pass_at_every_boundary_kind():
         sim.add_particles("sphere", material=a, radius=R_SMALL,
                           positions=[(0.0, 0.0, 4 * R_SMALL), (HOLE, 0.0, 7 * R_SMALL)])
         sim.run(steps=3000, progress=False)
-        assert sim._module.FUSED == fused
+        assert sim.backend.module.FUSED == fused
         runs[fused] = (mesh, bend, sim.bodies.position.copy(), sim.boundaries[0].force.copy())
     for x, y in zip(runs[False], runs[True], strict=True):
         np.testing.assert_array_equal(x, y)
@@ -962,5 +962,5 @@ def test_candidate_list_matches_brute_force(moved):
     if moved:
         sim.run(steps=3000, progress=False)
         assert np.abs(sim.walls.frame[0, 3:12] - pose[0].ravel()).max() > 0.1
-        sim._rebuild()
+        sim.backend.rebuild()
         assert pair_set(sim) == brute_pairs(sim, sim.skin)

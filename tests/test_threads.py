@@ -47,7 +47,7 @@ def test_one_and_two_threads_give_identical_trajectories(two_pass):
     runs = []
     for threads in (1, 2):
         sim = _scene(threads)
-        sim._two_pass = two_pass
+        sim.backend.force_pass = "two_pass" if two_pass else "auto"
         sim.run(steps=5000, progress=False)
         assert sim._diag[6] > 20  # a colliding scene, not a free fall
         runs.append((sim.bodies.position.copy(), sim.bodies.velocity.copy(),
@@ -67,10 +67,10 @@ def test_fused_pass_and_two_pass_sum_agree_bit_for_bit():
         sim = _scene(threads)
         if two_pass == "switch":
             for k in range(4):
-                sim._two_pass = k % 2 == 1
+                sim.backend.force_pass = "two_pass" if k % 2 == 1 else "auto"
                 sim.run(steps=500, progress=False)
         else:
-            sim._two_pass = two_pass
+            sim.backend.force_pass = "two_pass" if two_pass else "auto"
             sim.run(steps=2000, progress=False)
         runs.append(_state(sim))
     for other in runs[1:]:
@@ -84,7 +84,7 @@ def test_clustered_bodies_one_and_two_threads_identical():
     for threads in (1, 2):
         sim = _scene(threads, clusters=True)
         sim.run(steps=3000, progress=False)
-        assert sim._fused() == 0 and sim._diag[6] > 5
+        assert sim.backend.fused_chunks() == 0 and sim._diag[6] > 5
         runs.append(_state(sim))
     for a, b in zip(*runs, strict=True):
         np.testing.assert_array_equal(a, b)

@@ -311,7 +311,9 @@ def test_particle_outside_box_refused(sim, glass):
 
 def test_missing_contact_law_between_particle_materials(sim, glass, steel):
     sim.add_particles("sphere", material=glass, radius=R, positions=[(0, 0, 0)])
-    sim.add_particles("sphere", material=steel, radius=R, positions=[(0.01, 0, 0)])
+    # (two steel bodies: one alone could not meet another of its material)
+    sim.add_particles("sphere", material=steel, radius=R, positions=[(0.01, 0, 0),
+                                                                      (0.02, 0, 0)])
     with pytest.raises(dpm.SceneError, match=r"no contact law for material pair\(s\) "
                                              r"glass-steel, steel-steel; set them with "
                                              r"sim\.contact"):
@@ -452,9 +454,9 @@ def test_unstable_head_on_collision_stops(glass):
 def test_speed_check_names_the_fastest_body_in_any_block(glass, monkeypatch, block):
     """After each kernel call the fastest body is found block by block; a body that moves
     more than half its radius per step stops the run with its id and the largest safe dt."""
-    from dpm import simulation
+    from dpm import diagnosis
 
-    monkeypatch.setattr(simulation, "SPEED_BLOCK", block)
+    monkeypatch.setattr(diagnosis, "SPEED_BLOCK", block)
     sim = dpm.Simulation(dt=1e-4, gravity=(0, 0, 0), dt_check="off")
     sim.contact(glass, glass, model="hertz_mindlin", restitution=0.5, friction=0.3)
     pos = [(0, 0, 0), (0.01, 0, 0), (0.02, 0, 0), (0.03, 0, 0), (0.04, 0, 0)]

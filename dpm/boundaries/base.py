@@ -89,6 +89,19 @@ class Boundary:
         #: velocity of the frame origin and angular velocity at the last step (for power)
         self.velocity = np.zeros(3)
         self.angular_velocity = np.zeros(3)
+        #: simulated time [s] of the load above
+        self.load_time = 0.0
+
+    def record_load(self, time: float, force: np.ndarray, torque: np.ndarray,
+                    velocity: np.ndarray, angular_velocity: np.ndarray) -> None:
+        """Store the load of the last step (the run loop calls it after each kernel call):
+        force [N] and torque about :attr:`torque_point` [N m] that the particles exert,
+        the frame's origin velocity and angular velocity, at simulated time ``time``."""
+        self.load_time = float(time)
+        self.force = force
+        self.torque = torque
+        self.velocity = velocity
+        self.angular_velocity = angular_velocity
 
     @property
     def torque_point(self) -> np.ndarray:
@@ -100,7 +113,7 @@ class Boundary:
         (-(F . v_pivot + T . omega): positive when the drive works on the particles)."""
         from ..motion import frames
 
-        t = getattr(self, "_time", 0.0)
+        t = self.load_time
         if self.motion is None:
             return 0.0
         fr = frames(self.motion, np.array([t]))[0]

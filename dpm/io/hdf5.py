@@ -70,7 +70,7 @@ class Writer:
             chunk = (min(n_guess, 65536), width) if width else (min(n_guess, 65536),)
             g.create_dataset(name, shape=shape, maxshape=maxshape, dtype=dtype, chunks=chunk)
         # sphere elements of clustered bodies (empty when every body is one sphere)
-        self.clusters = not getattr(sim, "_spheres_only", True)
+        self.clusters = not (sim.plan is None or sim.plan.spheres_only)
         m_guess = max(len(sim.elements), 1)
         eg = f.create_group("elements")
         for name, (width, dtype) in ELEMENT_FIELDS.items():

@@ -101,13 +101,19 @@ def update_element_positions(b_pos, b_quat, b_estart, e_offset, e_pos):
 
 
 @pjit
-def begin_step(dt, update_elements, spin_only, b_pos, b_vel, b_quat, b_angvel, b_force,
-               b_torque, b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_offset, e_pos,
-               e_ref, e_d2):
+def pre_force(dt, ctl, bodies, elems):
     """Steps 1-2 per body: integrator pre-force part (which also sets the velocities the
-    forces are evaluated with, b_vf and b_wf), element positions, and each element's squared
-    displacement since the last rebuild (e_d2). ``spin_only``: every body is a single
-    sphere whose orientation is not tracked (the integrator's ``pre_force_sphere``)."""
+    forces are evaluated with, ``bodies.vf`` and ``bodies.wf``), element positions, and each
+    element's squared displacement since the last rebuild (``elems.worst``).
+    ``ctl.spin_only``: every body is a single sphere whose orientation is not tracked (the
+    integrator's ``pre_force_sphere``)."""
+    b_pos, b_vel, b_quat, b_angvel = bodies.pos, bodies.vel, bodies.quat, bodies.angvel
+    b_force, b_torque, b_invmass, b_invinertia = (bodies.force, bodies.torque, bodies.invmass,
+                                                  bodies.invinertia)
+    b_vf, b_wf, b_aux, b_estart = bodies.vf, bodies.wf, bodies.aux, bodies.estart
+    e_offset, e_pos, e_ref, e_d2 = elems.offset, elems.pos, elems.ref, elems.worst
+    update_elements = ctl.update_elements
+    spin_only = ctl.spin_only
     for b in prange(b_pos.shape[0]):
         if spin_only:
             pre_force_sphere(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
@@ -122,6 +128,21 @@ def begin_step(dt, update_elements, spin_only, b_pos, b_vel, b_quat, b_angvel, b
             dy = e_pos[e, 1] - e_ref[e, 1]
             dz = e_pos[e, 2] - e_ref[e, 2]
             e_d2[e] = dx * dx + dy * dy + dz * dz
+
+
+@pjit
+def post_force(dt, bodies):
+    """Step 5 alone, per body: the integrator's post-force part (e.g. the second half
+    kick). :func:`compute_forces` with ``integrate`` runs it fused into its last per-body
+    loop; this separate form is for backends that must act between the forces and the
+    update (MPI: ghost forces handed back to their owners). Same arithmetic, same bits."""
+    b_pos, b_vel, b_quat, b_angvel = bodies.pos, bodies.vel, bodies.quat, bodies.angvel
+    b_force, b_torque, b_invmass, b_invinertia = (bodies.force, bodies.torque, bodies.invmass,
+                                                  bodies.invinertia)
+    b_aux = bodies.aux
+    for b in prange(b_pos.shape[0]):
+        post_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
+                        b_invinertia, dt, b_aux)
 
 
 @pjit
@@ -387,18 +408,25 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
 
 
 @pjit
-def contact_pass(dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radius, e_mat,
-                 e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, wl_start, wl_w, wl_hist,
-                 wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst, e_count):
+def contact_pass(dt, ctl, bodies, elems, pairs, walls, bnd):
     """Pass a: contact forces of every pair and element-boundary entry, stored per row.
 
-    nl_f[k] = (F on i, torque on body(i), torque on body(j)); wl_f[q] = (F, torque on the
-    body, torque on the boundary about its frame origin). Rows of pairs that do not touch
-    are zero.
-    e_worst[i], e_count[i]: largest overlap / radius and number of touching contacts.
+    pairs.force[k] = (F on i, torque on body(i), torque on body(j)); walls.force[q] = (F,
+    torque on the body, torque on the boundary about its frame origin). Rows of pairs that
+    do not touch are zero. elems.worst[i], elems.count[i]: largest overlap / radius and
+    number of touching contacts. Velocity-dependent forces see ``bodies.vf``/``wf``.
     """
-    period = bnd[14]
-    w_kind, w_par, w_owner, w_mat, w_ids, f_cur = bnd[0], bnd[1], bnd[2], bnd[3], bnd[4], bnd[5]
+    b_pos, b_vel, b_angvel, b_mass, b_invmass = (bodies.pos, bodies.vf, bodies.wf,
+                                                 bodies.mass, bodies.invmass)
+    e_owner, e_radius, e_mat, e_pos = elems.owner, elems.radius, elems.mat, elems.pos
+    e_worst, e_count = elems.worst, elems.count
+    nl_start, nl_j, nl_hist, nl_active, nl_f = (pairs.start, pairs.key, pairs.hist,
+                                                pairs.active, pairs.force)
+    wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag = (walls.start, walls.key, walls.hist,
+                                                        walls.active, walls.force, walls.tag)
+    pair_model, pair_params, period = ctl.pair_model, ctl.pair_params, ctl.period
+    w_kind, w_par, w_owner, w_mat, w_ids, f_cur = (bnd.kind, bnd.par, bnd.owner, bnd.material,
+                                                   bnd.ids, bnd.frame)
     for i in prange(e_pos.shape[0]):
         xi = e_pos[i, 0]
         yi = e_pos[i, 1]
@@ -465,11 +493,7 @@ def chunk_bounds(nchunks, nl_start):
 
 
 @pjit
-def fused_pass(dt, integrate, nchunks, gravity, b_pos, b_vel, b_quat, b_angvel, b_force,
-               b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux, e_owner, e_radius,
-               e_mat, e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair,
-               wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model, pair_params,
-               e_worst, e_count):
+def fused_pass(dt, integrate, ctl, bodies, elems, pairs, walls, bnd):
     """Passes a and b fused, for scenes whose bodies are all single spheres (element i is
     body i): each pair's force goes straight to both bodies' sums, as in LIGGGHTS, instead
     of through a force row.
@@ -495,8 +519,22 @@ def fused_pass(dt, integrate, nchunks, gravity, b_pos, b_vel, b_quat, b_angvel, 
     0.68); the same holds for loops that call the integrator's per-body parts (velocity
     Verlet's second half kick: 32 us against 240 us for 10,000 bodies).
     """
-    period = bnd[14]
-    w_kind, w_par, w_owner, w_mat, w_ids, f_cur = bnd[0], bnd[1], bnd[2], bnd[3], bnd[4], bnd[5]
+    b_pos, b_vel, b_quat, b_angvel = bodies.pos, bodies.vel, bodies.quat, bodies.angvel
+    b_force, b_torque, b_mass, b_invmass = (bodies.force, bodies.torque, bodies.mass,
+                                            bodies.invmass)
+    b_invinertia, b_vf, b_wf, b_aux = bodies.invinertia, bodies.vf, bodies.wf, bodies.aux
+    e_owner, e_radius, e_mat, e_pos = elems.owner, elems.radius, elems.mat, elems.pos
+    e_worst, e_count = elems.worst, elems.count
+    nl_start, nl_j, nl_hist, nl_active, nl_f = (pairs.start, pairs.key, pairs.hist,
+                                                pairs.active, pairs.force)
+    t_start, t_pair = pairs.t_start, pairs.t_pair
+    wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag = (walls.start, walls.key, walls.hist,
+                                                        walls.active, walls.force, walls.tag)
+    pair_model, pair_params, period = ctl.pair_model, ctl.pair_params, ctl.period
+    w_kind, w_par, w_owner, w_mat, w_ids, f_cur = (bnd.kind, bnd.par, bnd.owner, bnd.material,
+                                                   bnd.ids, bnd.frame)
+    nchunks = ctl.fused
+    gravity = ctl.gravity
     g0 = gravity[0]
     g1 = gravity[1]
     g2 = gravity[2]
@@ -587,11 +625,17 @@ def fused_pass(dt, integrate, nchunks, gravity, b_pos, b_vel, b_quat, b_angvel, 
 
 
 @pjit
-def sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass,
-             b_invmass, b_invinertia, b_aux, b_estart, nl_start, nl_active, nl_f, t_start, t_pair,
-             wl_start, wl_active, wl_f, e_count):
+def sum_pass(dt, integrate, ctl, bodies, elems, pairs, walls):
     """Pass b: gravity plus the stored contact rows of each body's elements in a fixed
     order; then (if ``integrate``) step 5, the integrator's post-force part, for that body."""
+    b_pos, b_vel, b_quat, b_angvel = bodies.pos, bodies.vel, bodies.quat, bodies.angvel
+    b_force, b_torque, b_mass, b_invmass = (bodies.force, bodies.torque, bodies.mass,
+                                            bodies.invmass)
+    b_invinertia, b_aux, b_estart = bodies.invinertia, bodies.aux, bodies.estart
+    nl_start, nl_f, t_start, t_pair = pairs.start, pairs.force, pairs.t_start, pairs.t_pair
+    wl_start, wl_f = walls.start, walls.force
+    e_count = elems.count
+    gravity = ctl.gravity
     for b in prange(b_force.shape[0]):
         m = b_mass[b]
         fx = m * gravity[0]
@@ -633,39 +677,27 @@ def sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_
 
 
 @jit
-def compute_forces(dt, integrate, fused, gravity, b_pos, b_vel, b_quat, b_angvel, b_force,
-                   b_torque,
-                   b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner, e_radius,
-                   e_mat, e_pos,
-                   nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair, wl_start, wl_w,
-                   wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst,
-                   e_count, diag):
+def compute_forces(dt, integrate, ctl, bodies, elems, pairs, walls, bnd, diag):
     """Gravity plus all contact forces (passes a, b, c), then the integrator's post-force
     part if ``integrate``; returns the largest overlap / radius. Velocity-dependent forces
-    see the velocities ``b_vf``, ``b_wf`` that the integrator's pre-force part set.
+    see the velocities ``bodies.vf``, ``bodies.wf`` that the integrator's pre-force part set.
 
     With ``integrate`` False and ``dt`` = 0 it re-evaluates the forces of the current state
     without advancing the contact history.
     """
     if FUSED:  # a constant of the scene: only one of the two forms is compiled
-        fused_pass(dt, integrate, fused, gravity, b_pos, b_vel, b_quat, b_angvel,
-                   b_force, b_torque, b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux,
-                   e_owner, e_radius, e_mat, e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f,
-                   t_start, t_pair, wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, bnd,
-                   pair_model, pair_params, e_worst, e_count)
+        fused_pass(dt, integrate, ctl, bodies, elems, pairs, walls, bnd)
     else:
-        contact_pass(dt, b_pos, b_vf, b_wf, b_mass, b_invmass, e_owner, e_radius, e_mat,
-                     e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, wl_start, wl_w, wl_hist,
-                     wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst, e_count)
-        sum_pass(dt, integrate, gravity, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
-                 b_mass, b_invmass, b_invinertia, b_aux, b_estart, nl_start, nl_active, nl_f,
-                 t_start, t_pair, wl_start, wl_active, wl_f, e_count)
-    w_owner = bnd[2]
-    f_load = bnd[8]
+        contact_pass(dt, ctl, bodies, elems, pairs, walls, bnd)
+        sum_pass(dt, integrate, ctl, bodies, elems, pairs, walls)
+    w_owner = bnd.owner
+    f_load = bnd.load
+    wl_start, wl_w, wl_active, wl_f = walls.start, walls.key, walls.active, walls.force
+    e_worst, e_count = elems.worst, elems.count
     for b in range(f_load.shape[0]):
         for d in range(6):
             f_load[b, d] = 0.0
-    ne = e_pos.shape[0]
+    ne = e_worst.shape[0]
     for q in range(wl_start[ne]):
         if wl_active[q]:
             b = w_owner[wl_w[q]]
@@ -688,37 +720,25 @@ def compute_forces(dt, integrate, fused, gravity, b_pos, b_vel, b_quat, b_angvel
 
 
 @jit
-def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements, fused, spin_only,
-              b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass,
-              b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner, e_offset, e_radius, e_mat,
-              e_pos, e_ref, nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair, wl_start,
-              wl_w, wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst,
-              e_count, diag, f_table):
+def run_steps(nsteps, dt, ctl, bodies, elems, pairs, walls, bnd, diag, f_table):
     """Advance ``nsteps`` steps; stop early with a status in ``diag[0]``.
 
     ``f_table[s]`` holds the boundary frames at the end of step s (time t + (s+1) dt) for
     moving boundaries (an empty table: none moves).
-    On a list overflow the step stops after :func:`begin_step`; the caller grows the
+    On a list overflow the step stops after :func:`pre_force`; the caller grows the
     buffers and calls :func:`finish_step` before going on.
     """
     diag[0] = STATUS_OK
     diag[1] = 0
-    f_cur = bnd[5]
+    f_cur = bnd.frame
     for s in range(nsteps):
         if f_table.shape[0] > 0:
             row = min(s, f_table.shape[0] - 1)
             for b in range(f_cur.shape[0]):
                 for c in range(f_cur.shape[1]):
                     f_cur[b, c] = f_table[row, b, c]
-        begin_step(dt, update_elements, spin_only, b_pos, b_vel, b_quat, b_angvel, b_force,
-                   b_torque, b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_offset,
-                   e_pos, e_ref, e_worst)
-        finish_step(dt, gravity, skin, max_overlap, update_elements, fused, spin_only, b_pos,
-                    b_vel, b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia,
-                    b_vf, b_wf, b_aux, b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref,
-                    nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair, wl_start, wl_w,
-                    wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst,
-                    e_count, diag)
+        pre_force(dt, ctl, bodies, elems)
+        finish_step(dt, ctl, bodies, elems, pairs, walls, bnd, diag)
         if diag[0] == STATUS_OK or diag[0] == STATUS_OVERLAP:
             diag[1] = s + 1
         if diag[0] != STATUS_OK:
@@ -726,18 +746,23 @@ def run_steps(nsteps, dt, gravity, skin, max_overlap, update_elements, fused, sp
 
 
 @jit
-def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_active,
-            t_start, t_pair, wl_start, wl_w, wl_hist, wl_active, bnd, diag):
+def rebuild(ctl, elems, pairs, walls, bnd, diag):
     """Rebuild both lists; on overflow set the status and the needed size, change nothing."""
-    need = build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist,
-                                nl_active, t_start, t_pair, bnd[14])
+    skin = ctl.skin
+    e_pos, e_radius, e_ref = elems.pos, elems.radius, elems.ref
+    nl_j = pairs.key
+    need = build_neighbour_list(e_pos, e_radius, elems.owner, skin, pairs.start, nl_j,
+                                pairs.hist, pairs.active, pairs.t_start, pairs.t_pair,
+                                ctl.period)
     if need > nl_j.shape[0]:
         diag[0] = STATUS_OVERFLOW
         diag[3] = need
         return
-    f_cur = bnd[5]
-    need = build_boundary_list(e_pos, e_radius, skin, f_cur, bnd[0], bnd[1], bnd[9], bnd[10],
-                               bnd[11], bnd[12], bnd[13], wl_start, wl_w, wl_hist, wl_active)
+    f_cur = bnd.frame
+    wl_w = walls.key
+    need = build_boundary_list(e_pos, e_radius, skin, f_cur, bnd.kind, bnd.par, bnd.grid_int,
+                               bnd.grid_flt, bnd.cell_start, bnd.cell_items, bnd.prim_cells,
+                               walls.start, wl_w, walls.hist, walls.active)
     if need > wl_w.shape[0]:
         diag[0] = STATUS_WALL_OVERFLOW
         diag[3] = need
@@ -745,7 +770,7 @@ def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_a
     for e in range(e_pos.shape[0]):
         for d in range(3):
             e_ref[e, d] = e_pos[e, d]
-    f_ref = bnd[6]
+    f_ref = bnd.frame_ref
     for b in range(f_ref.shape[0]):
         for c in range(12):
             f_ref[b, c] = f_cur[b, c]
@@ -753,39 +778,45 @@ def rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_a
 
 
 @jit
-def finish_step(dt, gravity, skin, max_overlap, update_elements, fused, spin_only, b_pos,
-                b_vel, b_quat, b_angvel, b_force, b_torque, b_mass, b_invmass, b_invinertia,
-                b_vf, b_wf, b_aux, b_estart, e_owner, e_offset, e_radius, e_mat, e_pos, e_ref,
-                nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair, wl_start, wl_w,
-                wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model, pair_params, e_worst, e_count,
-                diag):
-    """Steps 3-5 of a step (after :func:`begin_step`, which left each element's squared
-    displacement in ``e_worst``); sets ``diag[0]`` on trouble."""
-    d2 = largest(e_worst)
+def needs_rebuild(ctl, elems, bnd):
+    """After :func:`pre_force` (which left each element's squared displacement in
+    ``elems.worst``): 1 if the lists must be rebuilt, 0 if not, -1 if a position is NaN.
+    Elements may each move skin/2 before two of them can meet unseen; an element and a
+    boundary together may move one skin. (An MPI backend takes the largest answer over its
+    ranks: the decision is collective.)"""
+    d2 = largest(elems.worst)
     if d2 != d2:
+        return -1
+    skin = ctl.skin
+    moved = boundary_motion_since_rebuild(bnd.frame, bnd.frame_ref, bnd.extent)
+    if d2 > 0.25 * skin * skin or math.sqrt(d2) + moved > skin:
+        return 1
+    return 0
+
+
+@jit
+def clear_list_rows(pairs, walls, n_elements):
+    """After a rebuild the rows belong to new pairs; the contact pass fills touching ones."""
+    if not FUSED:  # (fused_pass reads the rows of pairs across chunks only)
+        clear_rows(pairs.force, pairs.start[n_elements])
+    clear_rows(walls.force, walls.start[n_elements])
+
+
+@jit
+def finish_step(dt, ctl, bodies, elems, pairs, walls, bnd, diag):
+    """Steps 3-5 of a step (after :func:`pre_force`); sets ``diag[0]`` on trouble."""
+    need = needs_rebuild(ctl, elems, bnd)
+    if need < 0:
         diag[0] = STATUS_NAN
         return
-    # elements may each move skin/2 before two of them can meet unseen; an element and a
-    # boundary together may move one skin
-    moved = boundary_motion_since_rebuild(bnd[5], bnd[6], bnd[7])
-    if d2 > 0.25 * skin * skin or math.sqrt(d2) + moved > skin:
-        rebuild(skin, e_owner, e_radius, e_pos, e_ref, nl_start, nl_j, nl_hist, nl_active,
-                t_start, t_pair, wl_start, wl_w, wl_hist, wl_active, bnd, diag)
+    if need > 0:
+        rebuild(ctl, elems, pairs, walls, bnd, diag)
         if diag[0] != STATUS_OK:
             return
-        if not FUSED:  # (fused_pass reads the rows of pairs across chunks only)
-            clear_rows(nl_f, nl_start[e_pos.shape[0]])
-        clear_rows(wl_f, wl_start[e_pos.shape[0]])
+        clear_list_rows(pairs, walls, elems.pos.shape[0])
     # (a run-time True: a literal would compile compute_forces a second time)
-    worst = compute_forces(dt, skin == skin, fused, gravity, b_pos, b_vel, b_quat, b_angvel,
-                           b_force,
-                           b_torque,
-                           b_mass, b_invmass, b_invinertia, b_vf, b_wf, b_aux, b_estart, e_owner,
-                           e_radius, e_mat,
-                           e_pos, nl_start, nl_j, nl_hist, nl_active, nl_f, t_start, t_pair,
-                           wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, bnd, pair_model,
-                           pair_params, e_worst, e_count, diag)
-    if worst > max_overlap:
+    worst = compute_forces(dt, dt == dt, ctl, bodies, elems, pairs, walls, bnd, diag)
+    if worst > ctl.max_overlap:
         diag[0] = STATUS_OVERLAP
 
 

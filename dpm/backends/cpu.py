@@ -1,0 +1,350 @@
+"""The CPU backend: numba kernels over the host arrays, threads by ``prange``.
+
+Results are bit for bit the same for any number of threads and for either force form
+(``kernels/step.py``). Its fast form runs many steps in one compiled call
+(:func:`run_steps`); the parts of a step (:meth:`CpuBackend.pre_force` ...
+:meth:`CpuBackend.post_force`) give the same bits one at a time.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numba
+import numpy as np
+
+from ..errors import ParameterError
+from .base import (
+    STATUS_OK,
+    STATUS_OVERFLOW,
+    STATUS_OVERLAP,
+    STATUS_WALL_OVERFLOW,
+    StepResult,
+)
+from .records import (
+    BodyArrays,
+    BoundaryArrays,
+    ElementArrays,
+    PairList,
+    SceneConstants,
+    WallList,
+)
+
+#: scenes with fewer elements run on one thread unless ``threads`` is given
+SMALL_SCENE = 4000
+#: the force forms (``force_pass``)
+FORCE_PASSES = ("auto", "fused", "two_pass")
+
+
+def default_threads() -> int:
+    """``$DPM_THREADS`` (an integer or ``all``), else 1."""
+    value = os.environ.get("DPM_THREADS", "1")
+    if value == "all":
+        return numba.config.NUMBA_NUM_THREADS
+    try:
+        n = int(value)
+    except ValueError:
+        raise ParameterError(f"DPM_THREADS={value!r} is not an integer or 'all'") from None
+    if not 1 <= n <= numba.config.NUMBA_NUM_THREADS:
+        raise ParameterError(f"DPM_THREADS={n} is outside [1, "
+                             f"{numba.config.NUMBA_NUM_THREADS}] (NUMBA_NUM_THREADS)")
+    return n
+
+
+class CpuBackend:
+    """numba kernels on the host.
+
+    Parameters
+    ----------
+    threads : int, optional
+        Threads of the step kernels (default: ``$DPM_THREADS``, else 1; scenes under
+        ``SMALL_SCENE`` elements one thread unless given).
+    force_pass : {"auto", "fused", "two_pass"}
+        The force form: "auto" takes the fused pass when every body is a single sphere
+        and two passes otherwise; "two_pass" always sums through force rows (for
+        comparisons and profiles: the sums are the same bit for bit). May be changed
+        between runs.
+    sort_every : int
+        Renumber the bodies in the order of the contact-search cells they lie in after
+        every ``sort_every`` list rebuilds (0, the default: never), so that neighbours
+        sit close in memory (:meth:`sort_by_cell`). Rows of ``sim.bodies`` then change
+        order (ids do not); the sums of a body's forces may change by rounding.
+    """
+
+    name = "cpu"
+
+    def __init__(self, threads: int | None = None, force_pass: str = "auto",
+                 sort_every: int = 0) -> None:
+        if force_pass not in FORCE_PASSES:
+            raise ParameterError(f"CpuBackend(): force_pass={force_pass!r}; allowed: "
+                                 f"{', '.join(FORCE_PASSES)}")
+        if not (isinstance(sort_every, int) and sort_every >= 0):
+            raise ParameterError(f"CpuBackend(): sort_every={sort_every!r} must be an "
+                                 "integer >= 0 (0: never)")
+        self.threads = threads
+        self.force_pass = force_pass
+        #: renumber the bodies in cell order after this many list rebuilds (0: never)
+        self.sort_every = sort_every
+        self._rebuilds_since_sort = 0
+        self.sim: Any = None
+        self.module = None
+        #: kernel diagnostics (see kernels/step.py): status, steps, rebuilds, pairs
+        #: needed, largest overlap / radius, its element, touching contacts
+        self.diag = np.zeros(8)
+        self.aux = np.zeros((0, 0))
+        self._rows_stale = False
+
+    # ------------------------------------------------------------------ set-up
+    def thread_count(self, n_elements: int) -> int:
+        """Threads for a run of a scene of ``n_elements`` elements."""
+        if self.threads is not None:
+            return int(self.threads)
+        if n_elements < SMALL_SCENE:
+            return 1
+        return default_threads()
+
+    def attach(self, sim: Any) -> None:
+        self.sim = sim
+        plan, b, e = sim.plan, sim.bodies, sim.elements
+        self.module = None
+        self.sync_form()
+        n_el = len(e)
+        c, wc = sim.contacts, sim.wall_contacts
+        c.set_history_width(plan.history_width)
+        wc.set_history_width(plan.history_width)
+        if len(c.start) != n_el + 1:
+            c.reset(n_el, 4 * n_el)  # grows on demand
+            wc.reset(n_el, n_el // 4 + 16)
+        self._scratch()
+        self.aux = np.zeros((len(b), sim.integrator.aux_columns))
+        if not plan.spheres_only:
+            self.update_elements()
+
+    def _scratch(self) -> None:
+        b, e = self.sim.bodies, self.sim.elements
+        self.e_worst = np.zeros(len(e))
+        self.e_count = np.zeros(len(e), np.int32)
+        self.vf = np.zeros((len(b), 3))  # velocities the forces see (set by the integrator)
+        self.wf = np.zeros((len(b), 3))
+
+    def sync_form(self) -> None:
+        """Load the step module of the force pass the scene needs: the fused pass when
+        every body is a single sphere, else the two-pass sum (``FUSED``, a constant of the
+        generated module, so that a scene compiles one form only)."""
+        plan = self.sim.plan
+        want = (plan.spheres_only if self.force_pass == "auto"
+                else self.force_pass == "fused" and plan.spheres_only)
+        if self.module is None or self.module.FUSED != want:
+            self.module = plan.module(want)
+
+    def fused_chunks(self) -> int:
+        """The number of chunks (one per thread) if the step sums forces as it computes
+        them (kernels/step.py ``fused_pass``); 0 for the two-pass form. The sums are bit
+        for bit the same; the fused pass leaves the rows of most pairs stale, so those are
+        zeroed when the two-pass form takes over again."""
+        fused = numba.get_num_threads() if self.module.FUSED else 0
+        c = self.sim.contacts
+        c.use_rows(fused != 1)  # rows: the two-pass sum, and pairs across chunks
+        if not fused and self._rows_stale:
+            c.force[:] = 0.0
+        self._rows_stale = bool(fused)
+        return fused
+
+    def records(self) -> tuple:
+        """The kernel records of the current state: (constants, bodies, elements, pair
+        list, boundary list, boundary table); named tuples of the arrays, no copies."""
+        sim = self.sim
+        b, e, c, wc, w, plan = (sim.bodies, sim.elements, sim.contacts, sim.wall_contacts,
+                                sim.walls, sim.plan)
+        ctl = SceneConstants(sim.gravity, float(sim.skin), sim.max_overlap,
+                             not plan.spheres_only, self.fused_chunks(),
+                             plan.spheres_only and not sim.sphere_orientation,
+                             plan.pair_model, plan.pair_params, sim.period)
+        bodies = BodyArrays(b.position, b.velocity, b.orientation, b.angular_velocity,
+                            b.force, b.torque, b.mass, b.invmass, b.invinertia, self.vf,
+                            self.wf, self.aux, b.element_start)
+        elems = ElementArrays(e.owner, e.offset, e.radius, e.material, e.position,
+                              e.reference, self.e_worst, self.e_count)
+        pairs = PairList(c.start, c.key, c.history, c.active, c.force, c.t_start, c.t_pair)
+        walls = WallList(wc.start, wc.key, wc.history, wc.active, wc.force, wc.tag)
+        bnd = BoundaryArrays(w.kind, w.par, w.owner, w.material, w.ids, w.frame, w.frame_ref,
+                             w.extent, w.load, w.grid_int, w.grid_flt, w.cell_start,
+                             w.cell_items, w.prim_cells)
+        return ctl, bodies, elems, pairs, walls, bnd
+
+    def update_elements(self) -> None:
+        """Element world positions from their bodies."""
+        b, e = self.sim.bodies, self.sim.elements
+        if len(b):
+            self.module.update_element_positions(b.position, b.orientation, b.element_start,
+                                                 e.offset, e.position)
+
+    def _grow(self, status: int, needed: int) -> None:
+        sim = self.sim
+        (sim.contacts if status == STATUS_OVERFLOW else sim.wall_contacts).grow(needed)
+
+    # ------------------------------------------------------------------ the step's parts
+    def rebuild(self) -> None:
+        """Rebuild both lists (growing them as needed), history carried over by pair."""
+        d = self.diag
+        while True:
+            d[0] = STATUS_OK
+            ctl, _, elems, pairs, walls, bnd = self.records()
+            self.module.rebuild(ctl, elems, pairs, walls, bnd, d)
+            if d[0] in (STATUS_OVERFLOW, STATUS_WALL_OVERFLOW):
+                self._grow(int(d[0]), int(d[3]))
+            else:
+                break
+        self.sim.rebuild_count += int(d[2])
+        d[2] = 0
+        c, wc = self.sim.contacts, self.sim.wall_contacts
+        c.force[:c.count] = 0.0  # rows of the new lists: the contact pass fills touching ones
+        wc.force[:wc.count] = 0.0
+
+    def pre_force(self, dt: float) -> None:
+        ctl, bodies, elems, *_ = self.records()
+        self.module.pre_force(dt, ctl, bodies, elems)
+
+    def needs_rebuild(self) -> int:
+        ctl, _, elems, _, _, bnd = self.records()
+        return int(self.module.needs_rebuild(ctl, elems, bnd))
+
+    def forces(self, dt: float, integrate: bool = False) -> None:
+        """Gravity and contact forces (and the post-force part too if ``integrate``)."""
+        ctl, bodies, elems, pairs, walls, bnd = self.records()
+        self.module.compute_forces(dt, integrate, ctl, bodies, elems, pairs, walls, bnd,
+                                   self.diag)
+
+    def post_force(self, dt: float) -> None:
+        _, bodies, *_ = self.records()
+        self.module.post_force(dt, bodies)
+
+    def prime(self) -> None:
+        """Forces of the current state without advancing contact history (dt = 0)."""
+        b = self.sim.bodies
+        self.vf[:] = b.velocity
+        self.wf[:] = b.angular_velocity
+        self.forces(0.0, False)
+
+    def advance(self, n: int, dt: float, frames: np.ndarray) -> StepResult:
+        """``n`` steps in one compiled call (fewer when a status stops it); a full list
+        stops the loop after the pre-force part of a step, the lists grow and the step is
+        finished, so results do not depend on where a run is split into calls."""
+        d = self.diag
+        self.module.run_steps(n, dt, *self.records(), d, frames)
+        ran = int(d[1])
+        while d[0] in (STATUS_OVERFLOW, STATUS_WALL_OVERFLOW):
+            self._grow(int(d[0]), int(d[3]))
+            d[0] = STATUS_OK
+            self.module.finish_step(dt, *self.records(), d)
+            if d[0] in (STATUS_OK, STATUS_OVERLAP):
+                ran += 1
+        d[1] = ran
+        out = self._result(ran)
+        if self.sort_every:
+            self._rebuilds_since_sort += out.rebuilds
+            if self._rebuilds_since_sort >= self.sort_every:
+                self.sort_by_cell()
+        return out
+
+    def sort_by_cell(self) -> None:
+        """Renumber the bodies in the order of the contact-search cell (width 2 r_max +
+        skin, z fastest) that holds their centre (:meth:`dpm.Simulation.permute`: every
+        contact keeps its history)."""
+        sim = self.sim
+        b = sim.bodies
+        self._rebuilds_since_sort = 0
+        if len(b) < 2:
+            return
+        width = 2.0 * float(sim.elements.radius.max()) + float(sim.skin)
+        lo = b.position.min(axis=0)
+        cell = ((b.position - lo) / width).astype(np.int64)
+        dims = cell.max(axis=0) + 1
+        key = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]
+        order = np.argsort(key, kind="stable")
+        if np.any(order != np.arange(len(order))):
+            sim.permute(order)
+
+    def _result(self, ran: int) -> StepResult:
+        d = self.diag
+        out = StepResult(ran, int(d[0]), int(d[2]), float(d[4]), int(d[5]))
+        d[2] = 0
+        return out
+
+    # ------------------------------------------------------------------ reductions
+    def max_speed(self) -> tuple[int, float]:
+        """(index, speed) of the fastest body; speed NaN if a velocity is NaN."""
+        from ..diagnosis import fastest_body
+
+        return fastest_body(self.sim.bodies.velocity)
+
+    def max_overlap(self) -> tuple[float, int]:
+        """Largest overlap / radius since the last reset and its element."""
+        return float(self.diag[4]), int(self.diag[5])
+
+    def nan_count(self) -> int:
+        b = self.sim.bodies
+        return int(np.count_nonzero(~np.isfinite(b.position))
+                   + np.count_nonzero(~np.isfinite(b.velocity)))
+
+    def boundary_loads(self) -> np.ndarray:
+        """(boundaries, 6): force [0:3] and torque about the frame origin [3:6]."""
+        return self.sim.walls.load
+
+    def contact_count(self) -> int:
+        """Touching contacts (pairs and boundary entries) of the last force evaluation."""
+        return int(self.diag[6])
+
+    # ------------------------------------------------------------------ population
+    def keep_bodies(self, keep_b: np.ndarray, keep_e: np.ndarray, new_e: np.ndarray) -> None:
+        """Bodies are being removed: drop their rows of the lists and the integrator
+        state (history of the others kept)."""
+        sim = self.sim
+        sim.contacts.keep_rows(keep_e, new_e, True)
+        sim.wall_contacts.keep_rows(keep_e, new_e, False)
+        self.aux = np.ascontiguousarray(self.aux[keep_b])
+
+    def permute_bodies(self, order: np.ndarray) -> None:
+        """The bodies were reordered (:meth:`dpm.Simulation.permute`): the per-body state
+        this backend keeps follows (the integrator's auxiliary rows)."""
+        self.aux = np.ascontiguousarray(self.aux[order])
+        self._scratch()
+
+    def population_changed(self) -> None:
+        """After bodies were inserted or removed during a run: resize the per-element
+        arrays (keeping the contact lists and their history), rebuild, recompute forces."""
+        sim = self.sim
+        b, e = sim.bodies, sim.elements
+        n_el = len(e)
+        self.sync_form()
+        if not sim.plan.spheres_only:
+            self.update_elements()
+        sim.contacts.resize_rows(n_el)
+        sim.wall_contacts.resize_rows(n_el)
+        self._scratch()
+        if len(self.aux) < len(b):
+            extra = np.zeros((len(b) - len(self.aux), self.aux.shape[1]))
+            self.aux = np.ascontiguousarray(np.concatenate([self.aux, extra]))
+        e.reference = np.full((n_el, 3), np.inf)
+        self.rebuild()
+        self.prime()
+
+    # ------------------------------------------------------------------ checks
+    def pair_overlaps(self) -> np.ndarray:
+        """Overlap / smaller radius of each listed pair (negative: apart)."""
+        e, c = self.sim.elements, self.sim.contacts
+        return self.module.pair_overlaps(e.position, e.radius, c.start, c.key, self.sim.period)
+
+    def entry_overlaps(self) -> np.ndarray:
+        """Overlap / radius of each element-boundary entry (0 where not touching)."""
+        e, wc, w = self.sim.elements, self.sim.wall_contacts, self.sim.walls
+        return self.module.entry_overlaps(e.position, e.radius, wc.start, wc.key, w.kind,
+                                          w.par, w.owner, w.frame)
+
+    # ------------------------------------------------------------------ state transfer
+    def to_host(self) -> None:
+        """The host arrays are the state: nothing to copy."""
+
+    def from_host(self) -> None:
+        """The host arrays are the state: nothing to copy."""
