@@ -747,23 +747,9 @@ class Simulation:
         return fused
 
     def _join_pipe_ends(self) -> None:
-        """Mark open ends of tubes and bends that meet another piece's open end (same
-        centre, opposite outward direction, same radius, same motion object) as joined."""
-        ends = []
-        for bd in self.boundaries:
-            if hasattr(bd, "pipe_ends"):
-                bd.joined = set()
-                for name, c, d, r in bd.pipe_ends():
-                    ends.append((bd, name, np.asarray(c, float), np.asarray(d, float), r))
-        for k, (b1, n1, c1, d1, r1) in enumerate(ends):
-            for b2, n2, c2, d2, r2 in ends[k + 1:]:
-                if b1 is b2 or b1.motion is not b2.motion:
-                    continue
-                tol = 1e-9 * max(r1, r2)
-                if (np.linalg.norm(c1 - c2) <= tol and float(d1 @ d2) < -1 + 1e-9
-                        and abs(r1 - r2) <= tol):
-                    b1.joined.add(n1)
-                    b2.joined.add(n2)
+        from .boundaries.joints import join_pipe_ends
+
+        join_pipe_ends(self.boundaries)
 
     def _bnd(self) -> tuple:
         """The boundary arrays the kernels take as one tuple (see kernels/step.py)."""
