@@ -60,32 +60,57 @@ def _fingerprint(module: ModuleType) -> bytes:
     return b"\0".join(parts)
 
 
-#: boundary kind code -> (geometry function, whether it takes the radius, feature)
-_KIND_FUNCS = {0: "plane_distance", 1: "slab_distance", 2: "axi_distance",
-               3: "torus_distance", 4: "triangle_distance", 5: "sieve_distance"}
+def _kind_imports(kinds: list[int]) -> list[str]:
+    """Import lines of the geometry functions of these kinds (registry of
+    :mod:`dpm.boundaries.primitives`): the built-ins by name from ``boundary_geometry``,
+    a plugin's as ``_kind_<code>``."""
+    from .boundaries.primitives import BUILTIN_MODULE, primitive_kind
+
+    builtin = [primitive_kind(k).function[1] for k in kinds
+               if primitive_kind(k).function[0] == BUILTIN_MODULE]
+    lines = [f"from .boundary_geometry import {', '.join(builtin)}"] if builtin else []
+    for k in kinds:
+        mod, fn = primitive_kind(k).function
+        if mod != BUILTIN_MODULE:
+            lines.append(f"from {mod} import {fn} as {_kind_alias(k)}")
+    return lines
+
+
+def _kind_alias(k: int) -> str:
+    from .boundaries.primitives import BUILTIN_MODULE, primitive_kind
+
+    mod, fn = primitive_kind(k).function
+    return fn if mod == BUILTIN_MODULE else f"_kind_{k}"
 
 
 def _closest_lines(kinds: list[int], periodic: bool, fused: bool) -> list[str]:
     """A ``closest`` dispatching over the boundary kinds of the scene only; the scene's
-    constants (meshes present, periodic axes, which force pass)."""
-    kinds = sorted(set(kinds)) or [0]
-    names = ", ".join(_KIND_FUNCS[k] for k in kinds)
-    lines = [f"from .boundary_geometry import {names}", "",
-             f"HAS_TRIANGLES = {4 in kinds}", f"HAS_JOINTS = {2 in kinds or 3 in kinds}",
+    constants (meshes present, joinable kinds present, periodic axes, which force pass).
+    What each kind's geometry function is and returns comes from the registry
+    (:mod:`dpm.boundaries.primitives`)."""
+    from .boundaries.primitives import primitive_kind
+    from .kernels.boundary_geometry import PLANE, TRIANGLE
+
+    kinds = sorted(set(kinds)) or [PLANE]
+    joints = any(primitive_kind(k).joinable for k in kinds)
+    lines = [*_kind_imports(kinds), "",
+             f"HAS_TRIANGLES = {TRIANGLE in kinds}", f"HAS_JOINTS = {joints}",
              f"PERIODIC = {bool(periodic)}", f"FUSED = {bool(fused)}", "", "",
              "@inline_jit",
              "def closest(kind, p, x, y, z, r):",
              '    """Contact geometry of the boundary kinds of this scene."""']
     for n, k in enumerate(kinds):
+        spec = primitive_kind(k)
         pad = "    "
         if n < len(kinds) - 1:
             lines.append(f"    if kind == {k}:")
             pad = "        "
-        if k in (2, 3, 4):  # these return their feature
-            lines.append(f"{pad}return {_KIND_FUNCS[k]}(p, x, y, z)")
+        extra = ", r" if spec.takes_radius else ""
+        call = f"{_kind_alias(k)}(p, x, y, z{extra})"
+        if spec.returns_feature:
+            lines.append(f"{pad}return {call}")
             continue
-        extra = ", r" if k == 5 else ""
-        lines.append(f"{pad}d, nx, ny, nz = {_KIND_FUNCS[k]}(p, x, y, z{extra})")
+        lines.append(f"{pad}d, nx, ny, nz = {call}")
         lines.append(f"{pad}return d, nx, ny, nz, 0")
     return lines
 
@@ -132,13 +157,17 @@ def step_module(laws: list[tuple[str, str]], integrator_module: str,
         laws = [("dpm.kernels.law_linear", "linear_spring_dashpot")]
     src = render(laws, integrator_module, kinds, periodic, fused)
     h = hashlib.sha256(src.encode())
-    for mod in sorted({m for m, _ in laws} | {integrator_module}):
+    from .boundaries.primitives import primitive_kind
+
+    # the modules the bindings import: laws, integrator, plugin geometry functions
+    bound = {m for m, _ in laws} | {integrator_module} | {
+        primitive_kind(k).function[0] for k in set(kinds or [])}
+    for mod in sorted(bound):
         importlib.import_module(mod)
     kdir = Path(kernels.__file__).parent
     for f in sorted(kdir.glob("*.py")):  # every kernel module the step may reach
         importlib.import_module(f"dpm.kernels.{f.stem}")
-    for mod in sorted(m for m in sys.modules if m.startswith("dpm.kernels.")
-                      or m in {m for m, _ in laws} | {integrator_module}):
+    for mod in sorted(m for m in sys.modules if m.startswith("dpm.kernels.") or m in bound):
         h.update(_fingerprint(sys.modules[mod]))
     name = f"dpm_step_{h.hexdigest()[:20]}"
     if name in _LOADED:

@@ -115,6 +115,7 @@ def population_changed(sim: Any) -> None:
     if sim.plan.spheres_only:
         share_sphere_arrays(sim)
     sim.backend.population_changed()
+    sim._forces_valid = True
     sim._update_boundary_loads()
     sim._prepared = True
 
@@ -218,6 +219,7 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
         p = cand[pick]
         q = (random_quaternions(inlet.rng, 1) if inlet.random_orientation
              else np.array([[1.0, 0, 0, 0]]))
+        q = q / np.linalg.norm(q, axis=1)[:, None]  # (as add_particles does)
         ids = append_bodies(sim, sh, imat, inlet.material.density, p[None],
                             inlet.velocity[None], np.zeros((1, 3)), q)
         new_ids.append(ids)

@@ -18,6 +18,7 @@ from . import plan as _plan
 from .backends.base import STATUS_NAN, STATUS_OK, STATUS_OVERLAP, Backend, StepResult
 from .backends.cpu import SMALL_SCENE, default_threads  # noqa: F401  (public names)
 from .boundaries.base import Boundary
+from .boundaries.joints import join_pipe_ends
 from .errors import ParameterError
 from .flow import Inlet, Outlet
 from .impact.base import ImpactModel, PairContext
@@ -388,7 +389,7 @@ class Simulation:
         if self.skin is None:
             self.skin = 0.4 * float(self.elements.radius.min())
         # boundaries: pipe joints, primitives, frames, search grids
-        self._join_pipe_ends()
+        join_pipe_ends(self.boundaries)
         self.walls = BoundaryTable(self.boundaries, lambda m: self._material_index(m, ""),
                                    float(self.elements.radius.max()) + self.skin)
         spheres = population.spheres_only(self)
@@ -407,27 +408,6 @@ class Simulation:
         self.backend.rebuild()
         scene_check.check_initial_overlaps(self)
         self._prepared = True
-
-    def _join_pipe_ends(self) -> None:
-
-        """Mark open ends of tubes and bends that meet another piece's open end (same
-        centre, opposite outward direction, same radius, same motion object) as joined."""
-        ends = []
-        for bd in self.boundaries:
-            if hasattr(bd, "pipe_ends"):
-                bd.joined = set()
-                for name, c, d, r in bd.pipe_ends():
-                    ends.append((bd, name, np.asarray(c, float), np.asarray(d, float), r))
-        for k, (b1, n1, c1, d1, r1) in enumerate(ends):
-            for b2, n2, c2, d2, r2 in ends[k + 1:]:
-                if b1 is b2 or b1.motion is not b2.motion:
-                    continue
-                tol = 1e-9 * max(r1, r2)
-                if (np.linalg.norm(c1 - c2) <= tol and float(d1 @ d2) < -1 + 1e-9
-                        and abs(r1 - r2) <= tol):
-                    b1.joined.add(n1)
-                    b2.joined.add(n2)
-
 
     def _set_frames(self) -> None:
         """Boundary frames at the current time."""

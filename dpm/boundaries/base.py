@@ -65,6 +65,9 @@ class Boundary:
 
     name: ClassVar[str] = ""
     parameters: ClassVar[dict[str, Parameter]] = {}
+    #: whether open ends of this boundary can be joined to another piece's (then give
+    #: :meth:`pipe_ends`; :func:`dpm.boundaries.joints.join_pipe_ends` fills ``joined``)
+    joinable_ends: ClassVar[bool] = False
 
     def __init__(self, material: Material, call: str | None = None, motion: Any = None,
                  **params: Any) -> None:
@@ -119,6 +122,11 @@ class Boundary:
         fr = frames(self.motion, np.array([t]))[0]
         v_pivot = fr[12:15] + np.cross(fr[15:18], self.torque_point - fr[0:3])
         return -float(self.force @ v_pivot + self.torque @ fr[15:18])
+
+    def pipe_ends(self) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+        """(name, centre, outward unit axis, radius) of each open end that can be joined
+        (boundaries with ``joinable_ends``); none by default."""
+        return []
 
     def volume(self) -> float:
         """Volume of the boundary's material [m3] (0 for infinitely thin or unbounded

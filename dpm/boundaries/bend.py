@@ -28,6 +28,7 @@ class Bend(Boundary):
     """
 
     name = "bend"
+    joinable_ends = True
     parameters = {
         "center": Parameter(default=(0.0, 0.0, 0.0), kind="vector", unit="m"),
         "axis": Parameter(default=(0.0, 0.0, 1.0), kind="vector"),

@@ -30,6 +30,7 @@ class Tube(Boundary):
     """
 
     name = "tube"
+    joinable_ends = True
     parameters = {
         "start": Parameter(default=(0.0, 0.0, 0.0), kind="vector", unit="m"),
         "axis": Parameter(default=(0.0, 0.0, 1.0), kind="vector"),

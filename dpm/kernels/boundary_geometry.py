@@ -380,7 +380,9 @@ def sieve_distance(p, x, y, z, r):
 @jit
 def closest_any(kind, p, x, y, z, r):
     """(dist, nx, ny, nz, feature) of a sphere of radius r centred at (x, y, z), for any
-    kind (tests and tools; the step compiles a ``closest`` of the scene's kinds only)."""
+    built-in kind (tests, tools, the inlets' placement test; the step compiles a ``closest``
+    of the scene's kinds, plugin kinds included: dpm.boundaries.primitives). Another kind
+    counts as absent: distance inf."""
     if kind == PLANE:
         d, nx, ny, nz = plane_distance(p, x, y, z)
         return d, nx, ny, nz, 0
@@ -393,8 +395,10 @@ def closest_any(kind, p, x, y, z, r):
         return torus_distance(p, x, y, z)
     if kind == TRIANGLE:
         return triangle_distance(p, x, y, z)
-    d, nx, ny, nz = sieve_distance(p, x, y, z, r)
-    return d, nx, ny, nz, 0
+    if kind == SIEVE:
+        d, nx, ny, nz = sieve_distance(p, x, y, z, r)
+        return d, nx, ny, nz, 0
+    return math.inf, 0.0, 0.0, 1.0, 0
 
 
 @inline_jit
