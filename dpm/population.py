@@ -1,5 +1,4 @@
-"""Bodies in and out: appending built shapes, removing by id, inlets and outlets, the
-periodic wrap.
+"""Bodies in and out: appending built shapes, removing by id, inlets and outlets.
 
 Removal compacts bodies, elements and both contact lists (keys renumbered in order, so the
 rows stay sorted and the history of the others survives); insertion appends and the lists
@@ -118,25 +117,6 @@ def population_changed(sim: Any) -> None:
     sim._forces_valid = True
     sim._update_boundary_loads()
     sim._prepared = True
-
-
-def wrap_periodic(sim: Any) -> None:
-    """Move bodies that left the periodic box back in by whole periods (their elements
-    and rebuild references move with them, so no rebuild is triggered)."""
-    b, e, period = sim.bodies, sim.elements, sim.period
-    for d in range(3):
-        length = period[3 + d]
-        if length <= 0.0 or len(b) == 0:
-            continue
-        shift = np.floor((b.position[:, d] - period[d]) / length) * length
-        moved = shift != 0.0
-        if not np.any(moved):
-            continue
-        b.position[:, d] -= shift
-        es = shift[e.owner]
-        if e.position is not b.position:
-            e.position[:, d] -= es
-        e.reference[:, d] -= es
 
 
 def flow_event(sim: Any) -> None:

@@ -403,9 +403,7 @@ class Simulation:
         scene_check.check_period(self)
         self._set_frames()
         self.backend.attach(self)
-        if periodic:
-            population.wrap_periodic(self)
-        self.backend.rebuild()
+        self.backend.rebuild()  # (it wraps periodic positions into the box first)
         scene_check.check_initial_overlaps(self)
         self._prepared = True
 
@@ -446,8 +444,8 @@ class Simulation:
         skin/2, gravity and contact forces, integrator post-force part.
 
         Between kernel calls, in this order: ``dpm_after_step`` hooks (when any hook runs
-        per step, every call is one step, with ``dpm_before_step`` before it); the
-        periodic wrap, boundary loads, the instability checks (NaN, overlap beyond
+        per step, every call is one step, with ``dpm_before_step`` before it); boundary
+        loads, the instability checks (NaN, overlap beyond
         ``max_overlap``, tunnelling speed); the flow event (outlets remove, then inlets
         insert) when its interval is due; an output frame (then ``dpm_on_output``) when
         due. Calls are as long as these events allow, aiming at ~0.1 s each.
@@ -558,8 +556,6 @@ class Simulation:
                 break
         self.step_count += total
         self.time = self.step_count * self.dt
-        if self.plan.periodic:
-            population.wrap_periodic(self)
         self._update_boundary_loads()
         if res.status == STATUS_NAN:
             self._fail("a position became NaN")

@@ -49,23 +49,7 @@ def test_scene_matches_its_reference(name, backend):
     assert not problems, "\n".join(problems)
 
 
-#: scenes whose one- and two-thread runs are not always the same bits (a known problem,
-#: see below); they are still held to the tolerance against the reference
-NOT_BIT_IDENTICAL = {
-    # Periodic scenes: bodies that left the box are wrapped back (x - L, rounded) between
-    # kernel calls, and Simulation sizes its calls by wall time, so the end state depends
-    # on the machine's load: the same one-thread scene run in calls of 400, 1 or 7 steps
-    # ends 1.8e-13 m/s apart. With two threads on a loaded machine the call sizes vary
-    # from run to run (6 of 20 runs differed; non-periodic sphere scenes 0 of 20). Found
-    # by this suite; a fix would wrap at fixed steps (e.g. at rebuilds) inside the kernel.
-    "flow_periodic": "periodic wrap between kernel calls sized by wall time: the result "
-                     "depends on the call boundaries at the rounding level",
-}
-
-
-@pytest.mark.parametrize("name", [
-    pytest.param(n, marks=pytest.mark.xfail(reason=NOT_BIT_IDENTICAL[n], strict=False))
-    if n in NOT_BIT_IDENTICAL else n for n in SCENES])
+@pytest.mark.parametrize("name", SCENES)
 def test_one_and_two_threads_bit_identical(name):
     one, two = {"threads": 1}, {"threads": 2}
     ids = [bc.backend_id(b) for b in BACKENDS]
@@ -74,6 +58,26 @@ def test_one_and_two_threads_bit_identical(name):
     a, b = result(name, one), result(name, two)
     for f in ("id", *bc.STATE_FIELDS, *bc.LOAD_FIELDS):
         assert (a[f] == b[f]).all(), f"{name}: {f} differs between one and two threads"
+
+
+def test_periodic_results_do_not_depend_on_where_a_run_is_split_into_calls():
+    """The periodic wrap happens inside the step, every step (it used to happen between
+    kernel calls, whose lengths follow the wall time: the same one-thread scene run in
+    calls of 400, 1 or 7 steps ended 1.8e-13 m/s apart)."""
+    ends = []
+    for calls in (1, 7, 400):
+        sim, steps = bc.SCENES["flow_periodic"](bc.REFERENCE_BACKEND)
+        done = 0
+        while done < steps:
+            n = min(steps // calls if calls < steps else 1, steps - done)
+            sim.run(steps=n, progress=False)
+            done += n
+        o = sim.bodies.id.argsort()
+        ends.append([getattr(sim.bodies, f)[o] for f in bc.STATE_FIELDS])
+    assert ends[0][0].shape[0] > 50
+    for other in ends[1:]:
+        for a, b in zip(ends[0], other, strict=True):
+            assert (a == b).all()
 
 
 @pytest.mark.parametrize("name", SCENES)

@@ -190,8 +190,7 @@ class CpuBackend:
         d = self.diag
         while True:
             d[0] = STATUS_OK
-            ctl, _, elems, pairs, walls, bnd = self.records()
-            self.module.rebuild(ctl, elems, pairs, walls, bnd, d)
+            self.module.rebuild(*self.records(), d)
             if d[0] in (STATUS_OVERFLOW, STATUS_WALL_OVERFLOW):
                 self._grow(int(d[0]), int(d[3]))
             else:

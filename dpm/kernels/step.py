@@ -100,6 +100,24 @@ def update_element_positions(b_pos, b_quat, b_estart, e_offset, e_pos):
         place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos)
 
 
+@inline_jit
+def wrap_body(b, period, b_pos, b_estart, e_ref):
+    """A body whose centre left the periodic box moves back in by whole periods, with the
+    rebuild references of its elements (so no rebuild follows); its element positions are
+    placed from it next (or are its position: single spheres). Every step, inside the
+    kernel, so that results do not depend on where a run is split into calls."""
+    for d in range(3):
+        length = period[3 + d]
+        if length > 0.0:
+            x = b_pos[b, d]
+            lo = period[d]
+            if x < lo or x >= lo + length:
+                shift = math.floor((x - lo) / length) * length
+                b_pos[b, d] = x - shift
+                for e in range(b_estart[b], b_estart[b + 1]):
+                    e_ref[e, d] -= shift
+
+
 @pjit
 def pre_force(dt, ctl, bodies, elems):
     """Steps 1-2 per body: integrator pre-force part (which also sets the velocities the
@@ -114,6 +132,7 @@ def pre_force(dt, ctl, bodies, elems):
     e_offset, e_pos, e_ref, e_d2 = elems.offset, elems.pos, elems.ref, elems.worst
     update_elements = ctl.update_elements
     spin_only = ctl.spin_only
+    period = ctl.period
     for b in prange(b_pos.shape[0]):
         if spin_only:
             pre_force_sphere(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
@@ -121,6 +140,8 @@ def pre_force(dt, ctl, bodies, elems):
         else:
             pre_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
                            b_invinertia, dt, b_vf, b_wf, b_aux)
+        if PERIODIC:  # (a constant of the scene)
+            wrap_body(b, period, b_pos, b_estart, e_ref)
         if update_elements:
             place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos)
         for e in range(b_estart[b], b_estart[b + 1]):
@@ -746,8 +767,9 @@ def run_steps(nsteps, dt, ctl, bodies, elems, pairs, walls, bnd, diag, f_table):
 
 
 @jit
-def rebuild(ctl, elems, pairs, walls, bnd, diag):
-    """Rebuild both lists; on overflow set the status and the needed size, change nothing."""
+def rebuild(ctl, bodies, elems, pairs, walls, bnd, diag):
+    """Rebuild both lists; on overflow set the status and the needed size, change
+    nothing."""
     skin = ctl.skin
     e_pos, e_radius, e_ref = elems.pos, elems.radius, elems.ref
     nl_j = pairs.key
@@ -810,7 +832,7 @@ def finish_step(dt, ctl, bodies, elems, pairs, walls, bnd, diag):
         diag[0] = STATUS_NAN
         return
     if need > 0:
-        rebuild(ctl, elems, pairs, walls, bnd, diag)
+        rebuild(ctl, bodies, elems, pairs, walls, bnd, diag)
         if diag[0] != STATUS_OK:
             return
         clear_list_rows(pairs, walls, elems.pos.shape[0])
