@@ -290,9 +290,6 @@ class Contacts(_CsrList):
         super()._allocate(cap)
         self.t_pair = np.zeros(cap if self.rows else 0, KEY_DTYPE)
 
-    def grow(self, needed: int) -> None:
-        super().grow(needed)  # t_pair is rebuilt with the list
-
     def resize_rows(self, n_elements: int) -> None:
         super().resize_rows(n_elements)
         self.t_start = np.zeros(n_elements + 1, np.int64)  # rebuilt with the list
@@ -321,10 +318,6 @@ class Contacts(_CsrList):
             self.t_start[:] = 0
             np.cumsum(np.bincount(keys, minlength=len(self.start) - 1), out=self.t_start[1:])
             self.t_pair[:cnt] = np.argsort(keys, kind="stable")
-
-    @property
-    def pair_count(self) -> int:
-        return self.count
 
 
 class WallContacts(_CsrList):

@@ -77,19 +77,6 @@ class Sieve(Wall):
         """Volume of the plate [m3]: 4 a b thickness (1 - open area fraction)."""
         return 4.0 * self.a * self.b * 2.0 * self.h * (1.0 - self.open_area_fraction())
 
-    def reduced_half_width(self, radius: float | np.ndarray) -> np.ndarray:
-        """Half width of the hole a sphere of ``radius`` passes through (its centre must
-        lie within it), by the clearance model; 0 where the sphere is too big."""
-        r = np.asarray(radius, float)
-        w = 0.5 * self.hole
-        if self.model == "exact":
-            red = w - r
-        elif self.model == "radius":
-            red = w - self.zeta * (w - r)
-        else:
-            red = np.full_like(r, w - self.zeta * w)
-        return np.where(r < w, np.maximum(red, 0.0), 0.0)
-
     def below(self, position: np.ndarray) -> np.ndarray:
         """Mask of points on the far side of the plate (opposite its normal)."""
         return (np.asarray(position, float) - self.center) @ self.normal < 0.0

@@ -10,8 +10,8 @@ element j the pairs where it is the second element, for the race-free force sum.
 Element-plane contacts: the same CSR form keyed by (element, plane), for planes within
 r + skin of the element's centre.
 
-Both lists stay valid while no element moved more than skin/2 since the rebuild
-(:func:`max_displacement_sq`). The pair search runs in parallel in two passes (count,
+Both lists stay valid while no element moved more than skin/2 since the rebuild (the
+step's ``needs_rebuild``). The pair search runs in parallel in two passes (count,
 then fill), so the lists are identical for any number of threads.
 """
 
@@ -24,25 +24,6 @@ from .config import inline_jit, jit, pjit
 
 #: at most this many cells per element (a sparse scene gets coarser cells)
 CELLS_PER_ELEMENT = 2
-
-
-@pjit
-def max_displacement_sq(e_pos, e_ref):
-    """Largest squared displacement since the last rebuild; NaN if any position is NaN."""
-    n = e_pos.shape[0]
-    d2 = np.empty(n)
-    for i in prange(n):
-        dx = e_pos[i, 0] - e_ref[i, 0]
-        dy = e_pos[i, 1] - e_ref[i, 1]
-        dz = e_pos[i, 2] - e_ref[i, 2]
-        d2[i] = dx * dx + dy * dy + dz * dz
-    m = 0.0
-    for i in range(n):
-        if not d2[i] <= m:  # true for a larger value and for NaN
-            if d2[i] != d2[i]:
-                return d2[i]
-            m = d2[i]
-    return m
 
 
 @jit
