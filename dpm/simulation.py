@@ -17,6 +17,7 @@ from .boundaries.base import Boundary
 from .errors import ParameterError, SceneError, UnstableRunError
 from .flow import Inlet, Outlet, random_quaternions
 from .impact.base import ImpactModel, PairContext
+from .impact.parts import pack_tables
 from .kernels.step import (
     STATUS_NAN,
     STATUS_OK,
@@ -636,22 +637,11 @@ class Simulation:
         if self.dt_check != "off":
             for w in (refuse + warn):
                 warnings.warn(w, stacklevel=3)
-        # material-pair tables: one law index per distinct model class
-        nm = len(self.materials)
-        laws: list[tuple[str, str]] = []
-        self._pair_model = np.zeros((nm, nm), np.int64)
-        self._pair_params = np.zeros((nm, nm, 8))
-        for (ia, ib), law in self._contacts.items():
-            if law.kernel not in laws:
-                laws.append(law.kernel)
-            self._pair_model[ia, ib] = laws.index(law.kernel)
-            ctx = PairContext(report.impact_speed, *self._smallest_pair(ia, ib))
-            self._pair_params[ia, ib] = law.pair_row(self.materials[ia], self.materials[ib],
-                                                     ctx)
-        # history floats per contact: the widest the laws use (3-5: the rolling spring)
-        width = max([law.history_slots for law in self._contacts.values()] + [3])
-        if np.any(self._pair_params[:, :, 6] != 0.0):
-            width = max(width, 6)
+        # material-pair tables: one law per distinct composition (dpm.impact.parts); history
+        # floats per contact: the widest the laws use
+        laws, self._pair_model, self._pair_params, width = pack_tables(
+            self._contacts, self.materials,
+            lambda ia, ib: PairContext(report.impact_speed, *self._smallest_pair(ia, ib)))
         self.contacts.set_history_width(width)
         self.wall_contacts.set_history_width(width)
         n_el = len(self.elements)
