@@ -18,6 +18,7 @@ import numpy as np
 from .. import plan as _plan
 from ..errors import SceneError
 from ..kernels import implicit as K
+from ..state import Contacts
 from .base import Integrator
 
 PLANE_KINDS = ("plane", "box")
@@ -110,8 +111,13 @@ class ImplicitIntegrator(Integrator):
         self._radius = np.ascontiguousarray(e.radius)
         self._inertia = np.ascontiguousarray(b.inertia[:, 0])
         self._rmin = float(self._radius.min())
-        self._pi = np.zeros(8 * n + 16, np.int64)
-        self._pj = np.zeros(8 * n + 16, np.int64)
+        # candidate pairs: the explicit step's neighbour list (CSR, history merged)
+        self._pairs = Contacts(n, 4 * n + 16)
+        self._pairs.set_history_width(self._nh)
+        self._owner = np.arange(n, dtype=e.owner.dtype)
+        self._period = np.zeros(6)
+        self._pi = np.zeros(0, np.int64)
+        self._pj = np.zeros(0, np.int64)
         self._pkey = np.zeros(0, np.int64)
         self._phist = np.zeros((0, self._nh))
         self._wi = np.zeros(2 * n + 16, np.int64)
@@ -135,17 +141,19 @@ class ImplicitIntegrator(Integrator):
         step = float(np.max(np.linalg.norm(b.velocity, axis=1) * dt + 0.5 * acc * dt * dt,
                             initial=0.0))
         self._margin = max(0.2 * self._rmin, 4.0 * step)
-        n = len(x)
+        c = self._pairs
         while True:
-            cnt = self._K.candidate_pairs(x, self._radius, self._margin, self._pi, self._pj)
-            if cnt <= len(self._pi):
+            cnt = self._K.candidate_pairs(x, self._radius, self._owner, self._margin, c.start,
+                                          c.key, c.history, c.active, c.t_start, c.t_pair,
+                                          self._period)
+            if cnt <= c.capacity:
                 break
-            self._pi = np.zeros(2 * cnt, np.int64)
-            self._pj = np.zeros(2 * cnt, np.int64)
-        key = np.zeros(cnt, np.int64)
-        hist = np.zeros((cnt, self._nh))
-        self._K.sort_and_merge(self._pi, self._pj, cnt, n, self._pkey, self._phist, key, hist)
-        self._pkey, self._phist, self._np[0] = key, hist, cnt
+            c.grow(cnt)
+        self._pi = np.empty(cnt, np.int64)
+        self._K.pair_rows(c.start, self._pi)
+        self._pj = c.key[:cnt].astype(np.int64)
+        self._phist = c.history[:cnt]  # (a view: the steps update the list's history)
+        self._np[0] = cnt
         nw = len(self._w_point)
         while True:
             cw = self._K.candidate_walls(x, self._radius, self._margin, self._w_point,

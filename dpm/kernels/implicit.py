@@ -33,10 +33,11 @@ of normal n = (x_i - x_j)/d, overlap delta = r_i + r_j - d, normal force f_n(del
 
 The linear system is solved by block Gauss-Seidel sweeps (3x3 diagonal blocks inverted),
 the Jacobian and residual are rebuilt every Newton iteration, and contacts are re-detected
-at every iteration from a candidate list (pairs within a margin, built with a cell list
-and kept while no body moved more than half the margin), so a contact that starts during
-a step acts during that step (DPM thesis §3.8.1). Convergence: a full Newton correction with
-max |dx| below ``tol`` (absolute, metres) for every body. A correction that raises the
+at every iteration from a candidate list (pairs within a margin, built by the explicit
+step's neighbour list builder and kept while no body moved more than half the margin), so
+a contact that starts during a step acts during that step (DPM thesis §3.8.1).
+Convergence: a full Newton correction with max |dx| below ``tol`` (absolute, metres) for
+every body. A correction that raises the
 residual sum_i |R_i / m_i|^2 (a contact or a dashpot cut-off switching inside the step
 makes Newton cycle) is halved, up to 6 times (backtracking line search; each halving
 counts as an iteration). Where even 1/64 of the step raises the residual, the residual
@@ -45,7 +46,9 @@ may not exist); the iterate is then accepted if the last correction is below
 ``stall_tol`` (counted in ``stats[4]``). A step that does not converge within
 ``max_iter`` iterations stops the run with status 5.
 
-Tangential forces (spring with history, Coulomb limit) come from the contact law at the
+The contact laws are the scene's, composed from their parts in the bindings block that
+:func:`dpm.plan.implicit_module` writes (``pair_force``; ``pair_normal`` for k and c).
+Tangential forces and rolling torques come from the contact law at the
 current iterate with the history of the step start; they enter the residual but not the
 Jacobian (a fixed-point part of the iteration). Rotation is not solved implicitly: the
 contacts see omega* = omega_n + dt T_n / I during the iterations, and after convergence
@@ -63,6 +66,7 @@ import numpy as np
 
 # ruff: noqa: I001  (the bindings block must stay between its markers)
 from .config import inline_jit, step_jit as jit
+from .neighbours import build_neighbour_list
 from .rigid_rotation import rotate_isotropic
 
 # --- bindings begin (dpm.plan rewrites this block) ---
@@ -153,72 +157,22 @@ def normal_derivatives(model, p, delta, ddelta, nx, ny, nz, meff, reff, dt, fn, 
 
 
 @jit
-def candidate_pairs(x, radius, margin, out_i, out_j):
-    """Pairs (i < j) with |x_i - x_j| < r_i + r_j + margin, by a cell list; returns how many
-    there are (only the first ``len(out_i)`` are written)."""
-    n = x.shape[0]
-    if n < 2:
-        return 0
-    rmax = 0.0
-    lo = np.empty(3)
-    hi = np.empty(3)
-    for d in range(3):
-        lo[d] = x[0, d]
-        hi[d] = x[0, d]
-    for i in range(n):
-        rmax = max(rmax, radius[i])
-        for d in range(3):
-            lo[d] = min(lo[d], x[i, d])
-            hi[d] = max(hi[d], x[i, d])
-    cell = 2.0 * rmax + margin
-    dims = np.empty(3, np.int64)
-    total = 1
-    for d in range(3):
-        dims[d] = int((hi[d] - lo[d]) / cell) + 1
-        total *= dims[d]
-    while total > 8 * n + 64:  # sparse scene: coarser cells
-        cell *= 2.0
-        total = 1
-        for d in range(3):
-            dims[d] = int((hi[d] - lo[d]) / cell) + 1
-            total *= dims[d]
-    key = np.empty(n, np.int64)
-    for i in range(n):
-        cx = min(int((x[i, 0] - lo[0]) / cell), dims[0] - 1)
-        cy = min(int((x[i, 1] - lo[1]) / cell), dims[1] - 1)
-        cz = min(int((x[i, 2] - lo[2]) / cell), dims[2] - 1)
-        key[i] = (cx * dims[1] + cy) * dims[2] + cz
-    order = np.argsort(key)
-    start = np.zeros(total + 1, np.int64)
-    for i in range(n):
-        start[key[i] + 1] += 1
-    for c in range(total):
-        start[c + 1] += start[c]
-    count = 0
-    cap = out_i.shape[0]
-    for i in range(n):
-        c = key[i]
-        cz = c % dims[2]
-        cy = (c // dims[2]) % dims[1]
-        cx = c // (dims[1] * dims[2])
-        for ax in range(max(cx - 1, 0), min(cx + 2, dims[0])):
-            for ay in range(max(cy - 1, 0), min(cy + 2, dims[1])):
-                for az in range(max(cz - 1, 0), min(cz + 2, dims[2])):
-                    cc = (ax * dims[1] + ay) * dims[2] + az
-                    for s in range(start[cc], start[cc + 1]):
-                        j = order[s]
-                        if j <= i:
-                            continue
-                        dx = x[i, 0] - x[j, 0]
-                        dy = x[i, 1] - x[j, 1]
-                        dz = x[i, 2] - x[j, 2]
-                        lim = radius[i] + radius[j] + margin
-                        if dx * dx + dy * dy + dz * dz < lim * lim:
-                            if count < cap:
-                                out_i[count] = i
-                                out_j[count] = j
-                            count += 1
-    return count
+def candidate_pairs(x, radius, owner, margin, nl_start, nl_j, nl_hist, nl_active, t_start,
+                    t_pair, period):
+    """Pairs (i < j) with |x_i - x_j| < r_i + r_j + margin in the explicit step's half
+    neighbour list (CSR, history merged; :func:`.neighbours.build_neighbour_list`, called
+    here so that it is cached with this module); returns how many (above the capacity
+    nothing is changed)."""
+    return build_neighbour_list(x, radius, owner, margin, nl_start, nl_j, nl_hist, nl_active,
+                                t_start, t_pair, period)
+
+
+@jit
+def pair_rows(nl_start, pi):
+    """pi[k] = i for the pairs k of element i (the CSR list expanded)."""
+    for i in range(nl_start.shape[0] - 1):
+        for k in range(nl_start[i], nl_start[i + 1]):
+            pi[k] = i
 
 
 @jit
