@@ -13,7 +13,8 @@ run on an explicit (velocity Verlet) and an implicit (Newmark-beta) integrator:
   1 - 7/2 mu (1 + e) v_n / v_t).
 
 Both integrators run the same scene type, so one step module and one implicit module are
-compiled. The rest (layouts, generated source, refusals) compiles nothing.
+compiled for them; the implicit rolling-resistance test compiles one more of each. The rest
+(layouts, generated source, refusals) compiles nothing.
 """
 
 from __future__ import annotations
@@ -152,6 +153,28 @@ def test_composed_model_viscous_tangential_part(integrator, ct, mu, vt):
     assert c.tangential_restitution == pytest.approx(ref, abs=2e-3 * (1.0 - ref))
     if ct == 1.0:  # sliding all through the contact
         assert ref == pytest.approx(1.0 - 3.5 * mu * (1.0 + e) * V / vt, rel=2e-3)
+
+
+def test_implicit_rolling_resistance_of_a_composed_model():
+    """Newmark-beta with the composed model plus the constant-torque rolling part (the
+    implicit integrators used to refuse rolling resistance): a sphere rolling on a plane
+    decelerates at 5/7 mu_r g (DPM thesis eq. 2.53; the viscous tangential part keeps the
+    slip constant once its transient, rate 7 c_t / (2 m), has died out)."""
+    mu_r, g, v0 = 0.05, 9.81, 0.05
+    sim = dpm.Simulation(dt=1e-5, gravity=(0, 0, -g), integrator="newmark_beta")
+    m = Material("m", density=RHO, young=YOUNG, poisson=NU)
+    sim.contact(m, m, model="hertz_viscous", restitution=0.6, tangential_viscosity=1e-3,
+                friction=1.0, rolling_friction=mu_r)
+    sim.add_boundary("plane", material=m, point=(0, 0, 0), normal=(0, 0, 1))
+    k = 4.0 / 3.0 * estar() * math.sqrt(R)
+    d0 = (MASS * g / k) ** (2.0 / 3.0)  # resting Hertz overlap
+    sim.add_particles("sphere", material=m, radius=R, positions=[[0, 0, R - d0]],
+                      velocities=[[v0, 0, 0]], angular_velocities=[[0, v0 / R, 0]])
+    sim.run(steps=2000, progress=False)  # the slip's transient: exp(-6.7)
+    v1, t1 = sim.bodies.velocity[0, 0], sim.time
+    sim.run(steps=2000, progress=False)
+    decel = (v1 - sim.bodies.velocity[0, 0]) / (sim.time - t1)
+    assert decel == pytest.approx(5.0 / 7.0 * mu_r * g, rel=2e-3)
 
 
 # ------------------------------------------------------------------ no compilation below
