@@ -22,7 +22,6 @@ impact_models_quick.*) and prints the speed-against-error table.
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import math
 import platform
@@ -160,8 +159,9 @@ def _drive(law, p, delta, ddelta, vt, meff, reff, dt, hist, reps):
     acc = 0.0
     for _ in range(reps):
         for i in range(delta.shape[0]):
-            fn, fx, fy, fz = law(p, delta[i], ddelta[i], vt[i, 0], vt[i, 1], 0.0, 0.0, 0.0,
-                                 1.0, meff, reff, dt, hist, i)
+            fn, fx, fy, fz, _, _, _ = law(p, delta[i], ddelta[i], vt[i, 0], vt[i, 1], 0.0,
+                                          0.0, 0.0, 1.0, meff, reff, 0.0, 0.0, 0.0, dt, hist,
+                                          i)
             acc += fn + fx + fy
     return acc
 
@@ -172,15 +172,15 @@ def kernel_cost(case: dict, n: int = 100_000, reps: int = 20) -> float:
     cls = reg.lookup("impact_model", case["model"])
     law = cls(**case["params"])
     mat = dpm.Material("m", density=RHO, young=YOUNG, poisson=NU)
-    p = law.pair_row(mat, mat, dpm.impact.PairContext(V, M, R))
-    mod, fn = law.kernel
-    f = getattr(importlib.import_module(mod), fn)
+    p = tuple(law.pair_row(mat, mat, dpm.impact.PairContext(V, M, R)))
+    p = p + (0.0,) * (8 - len(p))  # the step's row: a tuple of (at least) 8 floats
+    f = dpm.plan.law_module([law.law_spec()]).law_0  # the law composed from its parts
     rng = np.random.default_rng(1)
     dmax = case["ref"]["max_overlap"]
     delta = rng.uniform(0.0, dmax, n)
     ddelta = rng.uniform(-V, V, n)
     vt = rng.normal(0.0, 0.1 * V, (n, 2))
-    hist = np.zeros((n, 8))
+    hist = np.zeros((n, max(law.history_width(), 1)))
     dt = case["ref"]["duration"] / 50
     _drive(f, p, delta[:10], ddelta[:10], vt[:10], M, R, dt, hist, 1)  # compile
     best = math.inf

@@ -115,15 +115,176 @@ def _closest_lines(kinds: list[int], periodic: bool, fused: bool) -> list[str]:
     return lines
 
 
+def _resolve(law):
+    """A law as the plan writes it: a composed :class:`~dpm.impact.parts.LawSpec`, or a
+    monolithic (module, function). A (module, name) that names no function but the
+    ``kernel`` of a registered composed model stands for that model's law."""
+    from .impact.parts import LawSpec
+
+    if isinstance(law, LawSpec):
+        return law
+    mod, fn = law
+    if hasattr(importlib.import_module(mod), fn):
+        return tuple(law)
+    from .plugins import registry
+
+    for name in registry().names("impact_model"):
+        cls = registry().lookup("impact_model", name)
+        if tuple(cls.kernel) == tuple(law) and cls.normal is not None:
+            return LawSpec(mod, fn, tuple(p for p in (cls.normal, cls.tangential,
+                                                      cls.adhesion) if p is not None))
+    raise ImportError(f"contact law {fn!r}: not in {mod} and no model's kernel")
+
+
+def _law_modules(laws) -> set[str]:
+    """Every module the laws' code lives in (for the fingerprint)."""
+    mods = set()
+    for law in map(_resolve, laws):
+        if hasattr(law, "parts"):
+            mods |= {p.target()[0] for p in law.parts}
+        else:
+            mods.add(law[0])
+    return mods
+
+
+_LAW_ARGS = "p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt, hist, k"
+_NORMAL_ARGS = "p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k"
+
+
+def _wrap(head: str, args: str, pad: str = "    ") -> list[str]:
+    """``head(args)`` as lines of at most 100 characters (continuations indented)."""
+    out = [f"{pad}{head}("]
+    for a in args.split(", "):
+        piece = a + ", "
+        if len(out[-1]) + len(piece) > 99:
+            out[-1] = out[-1].rstrip()
+            out.append(pad + "        ")
+        out[-1] += piece
+    out[-1] = out[-1].rstrip(", ") + ")"
+    return out
+
+
+def _composed(k: int, spec) -> tuple[list[str], list[str]]:
+    """Imports and functions of composed law ``k``: ``law_k`` (forces and rolling torque)
+    and ``normal_law_k`` (the normal force alone, for the implicit Jacobian)."""
+    lay = spec.layout
+    parts = {p.kind: p for p in spec.parts}
+    imports = []
+    for kind, part in parts.items():
+        mod, fn = part.target()
+        imports.append(f"from {mod} import {fn} as {kind}_{k}")
+
+    def q(part):
+        idx = lay.indices(part)
+        if len(idx) == 1:
+            return f"(p[{idx[0]}],)"
+        return "(" + ", ".join(f"p[{i}]" for i in idx) + ")"
+
+    def h(kind):
+        return str(lay.offset.get(kind, 0))
+
+    normal = _wrap(f"fn, kn = normal_{k}", ", ".join(
+        [q(parts["normal"]), "delta, ddelta, meff, reff, dt, hist, k", h("normal")]))
+    adhesion = []
+    if "adhesion" in parts:
+        adhesion = _wrap(f"fn = fn - adhesion_{k}", ", ".join(
+            [q(parts["adhesion"]), "delta, ddelta, meff, reff, dt, hist, k", h("adhesion")]))
+    names = " x ".join(type(p).__name__ for p in spec.parts)
+    body = ["", "", "@inline_jit", *_wrap(f"def law_{k}", _LAW_ARGS, "")]
+    body[-1] += ":"
+    body += [f'    """{spec[1]}: {names}."""', *normal]
+    if "tangential" in parts:
+        body += _wrap(f"ftx, fty, ftz = tangential_{k}", ", ".join(
+            [q(parts["tangential"]), "fn, kn, delta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, "
+             "hist, k", h("tangential")]))
+    else:
+        body.append("    ftx, fty, ftz = 0.0, 0.0, 0.0")
+    body += adhesion
+    if "rolling" in parts:
+        body += _wrap(f"rx, ry, rz = rolling_{k}", ", ".join(
+            [q(parts["rolling"]), "fn, reff, meff, wx, wy, wz, dt, hist, k", h("rolling")]))
+        body.append("    return fn, ftx, fty, ftz, rx, ry, rz")
+    else:
+        body.append("    return fn, ftx, fty, ftz, 0.0, 0.0, 0.0")
+    body += ["", "", "@inline_jit", f"def normal_law_{k}({_NORMAL_ARGS}):", *normal, *adhesion,
+             "    return fn"]
+    return imports, body
+
+
+def _monolithic(k: int, law) -> tuple[list[str], list[str]]:
+    """A monolithic law (fixed 8-slot row, rolling model in slot 6) wrapped to the
+    composed laws' interface."""
+    mod, fn = law
+    body = ["", "", "@inline_jit", *_wrap(f"def law_{k}", _LAW_ARGS, "")]
+    body[-1] += ":"
+    body += [f"    fn, ftx, fty, ftz = kernel_{k}(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, "
+             "meff, reff,", "                                   dt, hist, k)",
+             "    rx = 0.0", "    ry = 0.0", "    rz = 0.0",
+             "    if p[6] != 0.0:",
+             "        rx, ry, rz = rolling_torque(p, fn, reff, meff, wx, wy, wz, dt, hist, k)",
+             "    return fn, ftx, fty, ftz, rx, ry, rz", "", "",
+             "@inline_jit", f"def normal_law_{k}({_NORMAL_ARGS}):",
+             f"    return kernel_{k}(p, delta, ddelta, 0.0, 0.0, 0.0, nx, ny, nz, meff, reff, "
+             "dt, hist,", "                    k)[0]"]
+    return [f"from {mod} import {fn} as kernel_{k}"], body
+
+
+def _laws(laws) -> tuple[list[str], list[str]]:
+    """(imports, definitions) of the contact laws of a scene, generated from their parts:
+    ``law_0 ..`` and the dispatches ``pair_force(model, ...)`` -> (F_n, F_t x, y, z,
+    T_roll x, y, z) and ``pair_normal(model, ...)`` -> F_n; ``pair_row`` as wide as the
+    laws' rows (``pair_row16`` past 8 slots); ``ROLLING``: whether any law has rolling
+    resistance (a constant of the scene)."""
+    laws = [_resolve(law) for law in laws]
+    width = max([0] + [law.layout.width for law in laws if hasattr(law, "layout")])
+    rolling = any(not hasattr(law, "parts") or any(p.kind == "rolling" for p in law.parts)
+                  for law in laws)
+    imports = ["from .config import pair_row16 as pair_row" if width > 8 else
+               "from .config import pair_row"]
+    if any(not hasattr(law, "parts") for law in laws):
+        imports.append("from .rolling import rolling_torque")
+    body = ["", f"ROLLING = {rolling}"]
+    for k, law in enumerate(laws):
+        i, b = _composed(k, law) if hasattr(law, "parts") else _monolithic(k, law)
+        imports += i
+        body += b
+    for name, args, doc in (("pair_force", _LAW_ARGS, "F_n, F_t, rolling torque"),
+                            ("pair_normal", _NORMAL_ARGS, "the normal force F_n")):
+        call = "law" if name == "pair_force" else "normal_law"
+        body += ["", "", "@inline_jit", *_wrap(f"def {name}", f"model, {args}", "")]
+        body[-1] += ":"
+        body.append(f'    """{doc[0].upper() + doc[1:]} of the contact law ``model`` of this '
+                    'scene."""')
+        for k in range(len(laws) - 1):
+            body.append(f"    if model == {k}:")
+            body += _wrap(f"return {call}_{k}", args, "        ")
+        body += _wrap(f"return {call}_{len(laws) - 1}", args)
+    return imports, body
+
+
+def law_lines(laws) -> list[str]:
+    """The bindings lines of the contact laws (see :func:`_laws`)."""
+    imports, body = _laws(laws)
+    return imports + body
+
+
+def _splice(template: str, lines: list[str]) -> str:
+    """``template`` (a file of dpm/kernels) with its bindings block replaced."""
+    text = (Path(kernels.__file__).parent / template).read_text()
+    head, rest = text.split(_BEGIN)
+    _, tail = rest.split(_END)
+    src = head + "\n".join([_BEGIN, *lines, _END]) + tail
+    src = re.sub(r"^from \.", "from dpm.kernels.", src, flags=re.M)
+    return f"# Generated by dpm.plan from dpm/kernels/{template}; do not edit.\n" + src
+
+
 def render(laws: list[tuple[str, str]], integrator_module: str,
            kinds: list[int] | None = None, periodic: bool = False,
            fused: bool = False) -> str:
-    """Source of the step module for these (module, function) laws, integrator, boundary
-    kinds, periodic axes and force pass (``fused``: every body a single sphere)."""
-    template = (Path(kernels.__file__).parent / "step.py").read_text()
-    lines = [_BEGIN]
-    for k, (mod, fn) in enumerate(laws):
-        lines.append(f"from {mod} import {fn} as law_{k}")
+    """Source of the step module for these laws (composed :class:`LawSpec` s or monolithic
+    (module, function)), integrator, boundary kinds, periodic axes and force pass
+    (``fused``: every body a single sphere)."""
+    lines, body = _laws(laws)
     if hasattr(importlib.import_module(integrator_module), "pre_force_sphere"):
         lines.append(f"from {integrator_module} import pre_force_body, pre_force_sphere, "
                      "post_force_body")
@@ -131,21 +292,30 @@ def render(laws: list[tuple[str, str]], integrator_module: str,
         lines.append(f"from {integrator_module} import pre_force_body, post_force_body")
         lines.append("pre_force_sphere = pre_force_body")
     lines += _closest_lines(kinds or [], periodic, fused)
-    lines += ["", "", "@inline_jit",
-              "def pair_force(model, p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, "
-              "dt, hist, k):",
-              '    """Dispatch to the contact law ``model`` of this scene."""']
-    args = "p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k"
-    for k in range(len(laws) - 1):
-        lines.append(f"    if model == {k}:")
-        lines.append(f"        return law_{k}({args})")
-    lines.append(f"    return law_{len(laws) - 1}({args})")
-    lines.append(_END)
-    head, rest = template.split(_BEGIN)
-    _, tail = rest.split(_END)
-    src = head + "\n".join(lines) + tail
+    return _splice("step.py", lines + body)
+
+
+def render_implicit(laws) -> str:
+    """Source of the implicit integrators' kernels (dpm/kernels/implicit.py) for these
+    laws."""
+    return _splice("implicit.py", law_lines(laws))
+
+
+def law_module(laws) -> ModuleType:
+    """A module holding only these composed laws (``law_0 ..``, ``pair_force``,
+    ``pair_normal``), to call a law alone (benchmarks/impact_models.py times them)."""
+    imports, body = _laws(laws)
+    src = "\n".join(["# Generated by dpm.plan: contact laws alone; do not edit.",
+                     "from dpm.kernels.config import inline_jit", *imports, *body, ""])
     src = re.sub(r"^from \.", "from dpm.kernels.", src, flags=re.M)
-    return "# Generated by dpm.plan from dpm/kernels/step.py; do not edit.\n" + src
+    return _load(src, _law_modules(laws), "dpm_laws")
+
+
+def implicit_module(laws) -> ModuleType:
+    """Import (generating if needed) the implicit kernels for these laws."""
+    if not laws:
+        laws = [("dpm.kernels.law_linear", "linear_spring_dashpot")]
+    return _load(render_implicit(laws), _law_modules(laws), "dpm_implicit")
 
 
 def step_module(laws: list[tuple[str, str]], integrator_module: str,
@@ -156,20 +326,26 @@ def step_module(laws: list[tuple[str, str]], integrator_module: str,
     if not laws:
         laws = [("dpm.kernels.law_linear", "linear_spring_dashpot")]
     src = render(laws, integrator_module, kinds, periodic, fused)
-    h = hashlib.sha256(src.encode())
     from .boundaries.primitives import primitive_kind
 
     # the modules the bindings import: laws, integrator, plugin geometry functions
-    bound = {m for m, _ in laws} | {integrator_module} | {
-        primitive_kind(k).function[0] for k in set(kinds or [])}
-    for mod in sorted(bound):
+    geometry = {primitive_kind(k).function[0] for k in set(kinds or [])}
+    return _load(src, _law_modules(laws) | {integrator_module} | geometry, "dpm_step")
+
+
+def _load(src: str, modules: set[str], prefix: str) -> ModuleType:
+    """Write (if needed) and import the generated module ``src``, named by its text and
+    the fingerprint of every kernel module and of ``modules``."""
+    h = hashlib.sha256(src.encode())
+    for mod in sorted(modules):
         importlib.import_module(mod)
     kdir = Path(kernels.__file__).parent
     for f in sorted(kdir.glob("*.py")):  # every kernel module the step may reach
         importlib.import_module(f"dpm.kernels.{f.stem}")
-    for mod in sorted(m for m in sys.modules if m.startswith("dpm.kernels.") or m in bound):
+    for mod in sorted(m for m in sys.modules if m.startswith("dpm.kernels.")
+                      or m in modules):
         h.update(_fingerprint(sys.modules[mod]))
-    name = f"dpm_step_{h.hexdigest()[:20]}"
+    name = f"{prefix}_{h.hexdigest()[:20]}"
     if name in _LOADED:
         return _LOADED[name]
     d = cache_dir()
@@ -228,26 +404,3 @@ class ScenePlan:
         """The generated step module of this scene for one force form."""
         return step_module(self.laws, self.integrator_module, self.kinds, self.periodic,
                            fused=fused)
-
-
-def pair_tables(materials, contacts, context) -> tuple[list, object, object, int]:
-    """(laws, pair_model, pair_params, history width) of the material pairs.
-
-    ``contacts``: {(a, b): ImpactModel}; ``context(a, b)``: the
-    :class:`dpm.impact.base.PairContext` of the pair. One law index per distinct kernel;
-    the history width is the widest the laws declare (3-5 more for a rolling spring)."""
-    import numpy as np
-
-    nm = len(materials)
-    laws: list[tuple[str, str]] = []
-    pair_model = np.zeros((nm, nm), np.int64)
-    pair_params = np.zeros((nm, nm, 8))
-    for (ia, ib), law in contacts.items():
-        if law.kernel not in laws:
-            laws.append(law.kernel)
-        pair_model[ia, ib] = laws.index(law.kernel)
-        pair_params[ia, ib] = law.pair_row(materials[ia], materials[ib], context(ia, ib))
-    width = max([law.history_slots for law in contacts.values()] + [3])
-    if np.any(pair_params[:, :, 6] != 0.0):
-        width = max(width, 6)
-    return laws, pair_model, pair_params, width

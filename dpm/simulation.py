@@ -22,6 +22,7 @@ from .boundaries.joints import join_pipe_ends
 from .errors import ParameterError
 from .flow import Inlet, Outlet
 from .impact.base import ImpactModel, PairContext
+from .impact.parts import pack_tables
 from .material import Material
 from .measures import to_body as _to_body  # noqa: F401  (used by tests and scripts)
 from .motion import frames
@@ -383,8 +384,10 @@ class Simulation:
         if self.dt_check != "off":
             for w in (refuse + warn):
                 warnings.warn(w, stacklevel=3)
-        laws, pair_model, pair_params, width = _plan.pair_tables(
-            self.materials, self._contacts,
+        # material-pair tables: one law per distinct composition (dpm.impact.parts); the
+        # history floats per contact: the widest the laws use
+        laws, pair_model, pair_params, width = pack_tables(
+            self._contacts, self.materials,
             lambda a, b: PairContext(report.impact_speed, *smallest_pair(self, a, b)))
         if self.skin is None:
             self.skin = 0.4 * float(self.elements.radius.min())

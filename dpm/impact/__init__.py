@@ -1,13 +1,27 @@
 """Impact (contact force) models."""
 
 from .base import ImpactModel, PairContext
-from .cohesion import LinearCohesion
-from .hertz_brilliantov import HertzBrilliantov
-from .hertz_mindlin import HertzMindlin
-from .hooke import Hooke
-from .linear import LinearSpringDashpot
-from .maw import MawLinearSpring
-from .walton_braun import WaltonBraun
+from .cohesion import LinearCohesion, LinearCohesionAdhesion
+from .hertz_brilliantov import BrilliantovNormal, HertzBrilliantov, MindlinTangential
+from .hertz_mindlin import HertzMindlin, HertzTsujiNormal, MindlinTsujiTangential
+from .hooke import Hooke, HookeNormal
+from .linear import LinearNormal, LinearSpringDashpot, LinearTangential
+from .maw import MawLinearSpring, MawNormal, MawTangential
+from .parts import (
+                    EPSD,
+                    ROLLING_PARTS,
+                    AdhesionPart,
+                    ConstantTorque,
+                    NormalPart,
+                    Part,
+                    RollingPart,
+                    TangentialPart,
+)
+from .walton_braun import WaltonBraun, WaltonBraunNormal
 
-__all__ = ["HertzBrilliantov", "HertzMindlin", "Hooke", "ImpactModel", "LinearCohesion",
-           "LinearSpringDashpot", "MawLinearSpring", "PairContext", "WaltonBraun"]
+__all__ = ["EPSD", "ROLLING_PARTS", "AdhesionPart", "BrilliantovNormal", "ConstantTorque",
+           "HertzBrilliantov", "HertzMindlin", "HertzTsujiNormal", "Hooke", "HookeNormal",
+           "ImpactModel", "LinearCohesion", "LinearCohesionAdhesion", "LinearNormal",
+           "LinearSpringDashpot", "LinearTangential", "MawLinearSpring", "MawNormal",
+           "MawTangential", "MindlinTangential", "MindlinTsujiTangential", "NormalPart", "Part",
+           "PairContext", "RollingPart", "TangentialPart", "WaltonBraun", "WaltonBraunNormal"]

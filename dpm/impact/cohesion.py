@@ -2,10 +2,25 @@
 
 from __future__ import annotations
 
-from ..material import effective_shear, effective_young
 from ..parameters import Parameter
-from .base import COMMON, hertz_equivalent_stiffness
+from .base import COMMON
 from .hertz_mindlin import HertzMindlin
+from .parts import AdhesionPart
+
+
+class LinearCohesionAdhesion(AdhesionPart):
+    """Cohesion proportional to the Hertz contact area (EDEM "Linear Cohesion"; LIGGGHTS
+    ``cohesion sjkr``): F_a = k_c pi R* d, F_n = F_rep - F_a while the bodies overlap.
+    Slots (k_c,); parameter ``cohesion_energy_density`` k_c [J/m3]."""
+
+    name = "linear_cohesion"
+    slots = ("k_c",)
+    function = ("dpm.kernels.law_linear_cohesion", "linear_cohesion_adhesion")
+    parameters = {"cohesion_energy_density": Parameter(low=0.0, unit="J/m3",
+                                                       doc="cohesion energy density k_c")}
+
+    def values(self, model, a, b, context):
+        return (float(model.params["cohesion_energy_density"]),)
 
 
 class LinearCohesion(HertzMindlin):
@@ -22,19 +37,16 @@ class LinearCohesion(HertzMindlin):
     while the bodies overlap (the engine sees no contact at a separation), so it is a short-
     range cohesion; a JKR neck that survives past d = 0 would need detection at a distance.
     Tangential: Mindlin spring with Coulomb limit mu max(0, F_HM).
+    Parts: :class:`~dpm.impact.hertz_mindlin.HertzTsujiNormal` x
+    :class:`~dpm.impact.hertz_mindlin.MindlinTsujiTangential` x
+    :class:`LinearCohesionAdhesion`.
     """
 
     name = "linear_cohesion"
     kernel = ("dpm.kernels.law_linear_cohesion", "linear_cohesion")
+    adhesion = LinearCohesionAdhesion()
     parameters = {
         **COMMON,
         "cohesion_energy_density": Parameter(low=0.0, unit="J/m3",
                                              doc="cohesion energy density k_c"),
     }
-
-    def pair_row(self, a, b, context):
-        es = effective_young(a, b)
-        return self._row(es, effective_shear(a, b), self.beta, self.params["friction"],
-                         self.params["cohesion_energy_density"],
-                         stiffness=hertz_equivalent_stiffness(context.meff, context.reff, es,
-                                                              context.impact_speed))

@@ -6,7 +6,41 @@ import math
 
 from ..material import effective_young
 from .base import COMMON
-from .linear import TANGENTIAL, LinearSpringDashpot, cutoff_contact_time
+from .linear import (
+    TANGENTIAL,
+    LinearSpringDashpot,
+    LinearTangential,
+    _restitution_zeta,
+    cutoff_contact_time,
+)
+from .parts import NormalPart
+
+
+class HookeNormal(NormalPart):
+    """Linear spring-dashpot with k_n = 4/3 E* R* (DPM thesis §2.6.3, eq. 2.36; ERRATA: R*,
+    not sqrt(R*)), the contact's own R*:
+
+        F_n = max(0, k_n d + c_n d'),  c_n = 2 zeta sqrt(m* k_n)
+
+    zeta as :class:`~dpm.impact.linear.LinearNormal`. Slots (E*, zeta). Requires young and
+    poisson.
+    """
+
+    name = "hooke"
+    slots = ("E*", "zeta")
+    function = ("dpm.kernels.law_hooke", "hooke_normal")
+    parameters = {"restitution": COMMON["restitution"]}
+    needs_elastic_constants = True
+
+    def values(self, model, a, b, context):
+        return effective_young(a, b), _restitution_zeta(model)
+
+    def stiffness(self, model, a, b, context):
+        return 4.0 / 3.0 * effective_young(a, b) * context.reff
+
+    def contact_time(self, model, a, b, meff, reff, speed):
+        kn = 4.0 / 3.0 * effective_young(a, b) * reff
+        return cutoff_contact_time(_restitution_zeta(model), math.sqrt(kn / meff))
 
 
 class Hooke(LinearSpringDashpot):
@@ -25,17 +59,12 @@ class Hooke(LinearSpringDashpot):
     Parameters: restitution, friction, rolling_*, tangential_stiffness_ratio kappa
     (default 2/7), tangential_damping_ratio zeta_t (default: the normal zeta).
     Requires young and poisson on both materials.
+    Parts: :class:`HookeNormal` x :class:`~dpm.impact.linear.LinearTangential`.
     """
 
     name = "hooke"
     kernel = ("dpm.kernels.law_hooke", "hooke")
+    normal = HookeNormal()
+    tangential = LinearTangential()
     needs_elastic_constants = True
     parameters = {**COMMON, **TANGENTIAL}
-
-    def pair_row(self, a, b, context):
-        es = effective_young(a, b)
-        return self.linear_row(4.0 / 3.0 * es * context.reff, es)
-
-    def contact_time(self, a, b, meff, reff, speed):
-        kn = 4.0 / 3.0 * effective_young(a, b) * reff
-        return cutoff_contact_time(self.damping_ratio, math.sqrt(kn / meff))

@@ -9,6 +9,7 @@ from .._lazy import lazy_module
 from ..errors import ParameterError
 from ..parameters import Parameter
 from .base import COMMON, ImpactModel
+from .parts import NormalPart, TangentialPart
 
 optimize = lazy_module("scipy.optimize")
 
@@ -62,6 +63,62 @@ TANGENTIAL = {
 }
 
 
+def _restitution_zeta(model) -> float:
+    return damping_ratio_for_restitution(float(model.params["restitution"]))
+
+
+class LinearNormal(NormalPart):
+    """Linear spring-dashpot normal force (Cundall & Strack 1979; DPM thesis §2.6.1):
+
+        F_n = max(0, k_n d + c_n d'),  c_n = 2 zeta sqrt(m* k_n)
+
+    zeta solved so that the restitution with the attractive force cut off is the one set
+    (Schwager & Poschel 2007, :func:`damping_ratio_for_restitution`). Slots (k_n, zeta);
+    parameters ``stiffness`` [N/m], ``restitution``. Duration :func:`cutoff_contact_time`.
+    """
+
+    name = "linear"
+    slots = ("k_n", "zeta")
+    function = ("dpm.kernels.law_linear", "linear_normal")
+    parameters = {
+        "restitution": COMMON["restitution"],
+        "stiffness": Parameter(low=0.0, low_open=True, unit="N/m", doc="normal stiffness k_n"),
+    }
+
+    def values(self, model, a, b, context):
+        return float(model.params["stiffness"]), _restitution_zeta(model)
+
+    def stiffness(self, model, a, b, context):
+        return float(model.params["stiffness"])
+
+    def contact_time(self, model, a, b, meff, reff, speed):
+        return cutoff_contact_time(_restitution_zeta(model),
+                                   math.sqrt(model.params["stiffness"] / meff))
+
+
+class LinearTangential(TangentialPart):
+    """Tangential spring-dashpot of the linear family (Cundall & Strack 1979):
+
+        F_t = -(k_t s + c_t v_t), |F_t| <= mu F_n,  k_t = kappa k_n,  c_t = 2 zeta_t sqrt(m* k_n)
+
+    k_n is the normal part's stiffness; the spring s has history (projected on the tangent
+    plane) and carries mu F_n alone while sliding. Slots (mu, kappa, zeta_t); zeta_t
+    defaults to the linear damping ratio of the restitution. ``tangential_stiffness_ratio=0``
+    gives the thesis' viscous F_t = min(c_t |v_t|, mu F_n) (eq. 2.28).
+    """
+
+    name = "linear_spring_coulomb"
+    slots = ("mu", "kappa", "zeta_t")
+    history = 3
+    function = ("dpm.kernels.tangential", "linear_tangential")
+    parameters = {"friction": COMMON["friction"], **TANGENTIAL}
+
+    def values(self, model, a, b, context):
+        zt = model.params.get("tangential_damping_ratio")
+        return (float(model.params["friction"]), float(model.params["tangential_stiffness_ratio"]),
+                _restitution_zeta(model) if zt is None else float(zt))
+
+
 class LinearSpringDashpot(ImpactModel):
     """Linear spring-dashpot (Cundall & Strack 1979; DPM thesis Samiei 2012, §2.6.1).
 
@@ -77,11 +134,13 @@ class LinearSpringDashpot(ImpactModel):
     Parameters: stiffness k_n [N/m] (required), restitution, friction, rolling_friction,
     tangential_stiffness_ratio kappa (default 2/7), tangential_damping_ratio zeta_t
     (default: the normal zeta).
+    Parts: :class:`LinearNormal` x :class:`LinearTangential`.
     """
 
     name = "linear_spring_dashpot"
     kernel = ("dpm.kernels.law_linear", "linear_spring_dashpot")
-    history_slots = 3  # the tangential spring
+    normal = LinearNormal()
+    tangential = LinearTangential()
     parameters = {
         **COMMON,
         "stiffness": Parameter(low=0.0, low_open=True, unit="N/m", doc="normal stiffness k_n"),
@@ -91,17 +150,3 @@ class LinearSpringDashpot(ImpactModel):
     @property
     def damping_ratio(self) -> float:
         return damping_ratio_for_restitution(float(self.params["restitution"]))
-
-    def linear_row(self, kn: float, kernel_k: float):
-        """Pair row [kernel_k, zeta, mu, kappa, zeta_t] for the normal stiffness kn."""
-        zeta = self.damping_ratio
-        zt = self.params["tangential_damping_ratio"]
-        return self._row(kernel_k, zeta, self.params["friction"],
-                         self.params["tangential_stiffness_ratio"],
-                         zeta if zt is None else zt, stiffness=kn)
-
-    def pair_row(self, a, b, context):
-        return self.linear_row(self.params["stiffness"], self.params["stiffness"])
-
-    def contact_time(self, a, b, meff, reff, speed):
-        return cutoff_contact_time(self.damping_ratio, math.sqrt(self.params["stiffness"] / meff))

@@ -6,7 +6,42 @@ import math
 
 from ..parameters import Parameter
 from .base import COMMON, ImpactModel
-from .linear import damping_ratio_for_restitution
+from .linear import LinearTangential
+from .parts import NormalPart
+
+
+def _unloading(model) -> float:
+    return float(model.params["stiffness"]) / float(model.params["restitution"]) ** 2
+
+
+class WaltonBraunNormal(NormalPart):
+    """Hysteretic spring (Walton & Braun 1986, J. Rheol. 30, 949; DPM thesis §2.6.6):
+
+        loading (d >= d_max so far):  F_n = k_l d
+        otherwise:                    F_n = max(0, k_ul (d - d_0)),  d_0 = d_max (1 - k_l/k_ul)
+
+    k_ul = k_l / e^2, so e = sqrt(k_l/k_ul) at every speed. Slots (k_l, k_ul); history
+    (d_max, d_0); k_n passed on: k_l. Duration pi/2 (sqrt(m*/k_l) + sqrt(m*/k_ul)).
+    """
+
+    name = "walton_braun"
+    slots = ("k_l", "k_ul")
+    history = 2
+    function = ("dpm.kernels.law_walton_braun", "walton_braun_normal")
+    parameters = {
+        "restitution": COMMON["restitution"],
+        "stiffness": Parameter(low=0.0, low_open=True, unit="N/m", doc="loading stiffness k_l"),
+    }
+
+    def values(self, model, a, b, context):
+        return float(model.params["stiffness"]), _unloading(model)
+
+    def stiffness(self, model, a, b, context):
+        return float(model.params["stiffness"])
+
+    def contact_time(self, model, a, b, meff, reff, speed):
+        kl = float(model.params["stiffness"])
+        return 0.5 * math.pi * (math.sqrt(meff / kl) + math.sqrt(meff / _unloading(model)))
 
 
 class WaltonBraun(ImpactModel):
@@ -25,12 +60,14 @@ class WaltonBraun(ImpactModel):
     Parameters: stiffness k_l [N/m] (required), restitution (sets k_ul), friction,
     rolling_*, tangential_stiffness_ratio kappa (default 2/7), tangential_damping_ratio
     zeta_t (default: the damping ratio a linear dashpot would need for this restitution).
-    History slots 6, 7 hold d_max and d_0.
+    Parts: :class:`WaltonBraunNormal` (history d_max, d_0) x
+    :class:`~dpm.impact.linear.LinearTangential`.
     """
 
     name = "walton_braun"
     kernel = ("dpm.kernels.law_walton_braun", "walton_braun")
-    history_slots = 8  # tangential spring, delta_max (6), delta_0 (7)
+    normal = WaltonBraunNormal()
+    tangential = LinearTangential()
     parameters = {
         **COMMON,
         "stiffness": Parameter(low=0.0, low_open=True, unit="N/m",
@@ -43,16 +80,4 @@ class WaltonBraun(ImpactModel):
 
     @property
     def unloading_stiffness(self) -> float:
-        return float(self.params["stiffness"]) / float(self.params["restitution"]) ** 2
-
-    def pair_row(self, a, b, context):
-        kl = float(self.params["stiffness"])
-        zt = self.params["tangential_damping_ratio"]
-        if zt is None:
-            zt = damping_ratio_for_restitution(float(self.params["restitution"]))
-        return self._row(kl, self.unloading_stiffness, self.params["friction"],
-                         self.params["tangential_stiffness_ratio"], zt, stiffness=kl)
-
-    def contact_time(self, a, b, meff, reff, speed):
-        kl = float(self.params["stiffness"])
-        return 0.5 * math.pi * (math.sqrt(meff / kl) + math.sqrt(meff / self.unloading_stiffness))
+        return _unloading(self)

@@ -3,8 +3,10 @@ with block Gauss-Seidel on the sparse contact Jacobian (DPM thesis, Samiei 2012,
 
 The equations, the Jacobian and the treatment of friction and rotation are in
 :mod:`dpm.kernels.implicit` and docs/integrators.md. These classes pack the scene for the
-kernels, keep the candidate contact list and its tangential history between steps, and
-report the Newton iterations of every step.
+kernels, keep the candidate contact list and its history between steps, and report the
+Newton iterations of every step. The kernels are generated per scene by
+:func:`dpm.plan.implicit_module` with the scene's contact laws composed from their parts,
+as the explicit step's (any impact model works, rolling resistance included).
 """
 
 from __future__ import annotations
@@ -13,16 +15,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from .. import plan as _plan
 from ..errors import SceneError
 from ..kernels import implicit as K
+from ..state import Contacts
 from .base import Integrator
 
-#: contact laws the implicit kernels can call, by the (module, function) of the model
-LAW_KINDS = {
-    ("dpm.kernels.law_linear", "linear_spring_dashpot"): K.LAW_LINEAR,
-    ("dpm.kernels.law_hertz_mindlin", "hertz_mindlin"): K.LAW_HERTZ_MINDLIN,
-    ("dpm.kernels.law_hooke", "hooke"): K.LAW_HOOKE,
-}
 PLANE_KINDS = ("plane", "box")
 
 
@@ -104,33 +102,28 @@ class ImplicitIntegrator(Integrator):
         self._w_mat = np.array(mats, np.int64)
         self._w_owner = np.array(owners, np.int64)
         self._w_force = np.zeros((len(mats), 3))
-        laws: list[tuple[str, str]] = []
-        for law in sim._contacts.values():
-            if law.kernel not in laws:
-                laws.append(law.kernel)
-        self._law_kind = np.zeros(max(len(laws), 1), np.int64)
-        for k, kern in enumerate(laws):
-            if kern not in LAW_KINDS:
-                problems.append(f"contact law {kern[1]!r} is not supported; allowed: "
-                                + ", ".join(f for _, f in LAW_KINDS))
-            else:
-                self._law_kind[k] = LAW_KINDS[kern]
-        if np.any(sim._pair_params[..., 6] != 0.0):
-            problems.append("rolling resistance is not supported")
         if problems:
             raise SceneError(f"integrator {self.name!r}: " + "; ".join(problems))
+        # the kernels with the scene's contact laws (the laws and tables of the step)
+        self._K = _plan.implicit_module(sim.plan.laws)
+        self._nh = int(sim.contacts.history_width)
         n = len(b)
         self._radius = np.ascontiguousarray(e.radius)
         self._inertia = np.ascontiguousarray(b.inertia[:, 0])
         self._rmin = float(self._radius.min())
-        self._pi = np.zeros(8 * n + 16, np.int64)
-        self._pj = np.zeros(8 * n + 16, np.int64)
+        # candidate pairs: the explicit step's neighbour list (CSR, history merged)
+        self._pairs = Contacts(n, 4 * n + 16)
+        self._pairs.set_history_width(self._nh)
+        self._owner = np.arange(n, dtype=e.owner.dtype)
+        self._period = np.zeros(6)
+        self._pi = np.zeros(0, np.int64)
+        self._pj = np.zeros(0, np.int64)
         self._pkey = np.zeros(0, np.int64)
-        self._phist = np.zeros((0, 8))
+        self._phist = np.zeros((0, self._nh))
         self._wi = np.zeros(2 * n + 16, np.int64)
         self._ww = np.zeros(2 * n + 16, np.int64)
         self._wkey = np.zeros(0, np.int64)
-        self._whist = np.zeros((0, 8))
+        self._whist = np.zeros((0, self._nh))
         self._np = np.zeros(1, np.int64)
         self._nw = np.zeros(1, np.int64)
         self._xref = np.zeros((n, 3))
@@ -148,28 +141,31 @@ class ImplicitIntegrator(Integrator):
         step = float(np.max(np.linalg.norm(b.velocity, axis=1) * dt + 0.5 * acc * dt * dt,
                             initial=0.0))
         self._margin = max(0.2 * self._rmin, 4.0 * step)
-        n = len(x)
+        c = self._pairs
         while True:
-            cnt = K.candidate_pairs(x, self._radius, self._margin, self._pi, self._pj)
-            if cnt <= len(self._pi):
+            cnt = self._K.candidate_pairs(x, self._radius, self._owner, self._margin, c.start,
+                                          c.key, c.history, c.active, c.t_start, c.t_pair,
+                                          self._period)
+            if cnt <= c.capacity:
                 break
-            self._pi = np.zeros(2 * cnt, np.int64)
-            self._pj = np.zeros(2 * cnt, np.int64)
-        key = np.zeros(cnt, np.int64)
-        hist = np.zeros((cnt, 8))
-        K.sort_and_merge(self._pi, self._pj, cnt, n, self._pkey, self._phist, key, hist)
-        self._pkey, self._phist, self._np[0] = key, hist, cnt
+            c.grow(cnt)
+        self._pi = np.empty(cnt, np.int64)
+        self._K.pair_rows(c.start, self._pi)
+        self._pj = c.key[:cnt].astype(np.int64)
+        self._phist = c.history[:cnt]  # (a view: the steps update the list's history)
+        self._np[0] = cnt
         nw = len(self._w_point)
         while True:
-            cw = K.candidate_walls(x, self._radius, self._margin, self._w_point,
+            cw = self._K.candidate_walls(x, self._radius, self._margin, self._w_point,
                                    self._w_normal, self._wi, self._ww)
             if cw <= len(self._wi):
                 break
             self._wi = np.zeros(2 * cw, np.int64)
             self._ww = np.zeros(2 * cw, np.int64)
         key = np.zeros(cw, np.int64)
-        hist = np.zeros((cw, 8))
-        K.sort_and_merge(self._wi, self._ww, cw, max(nw, 1), self._wkey, self._whist, key, hist)
+        hist = np.zeros((cw, self._nh))
+        self._K.sort_and_merge(self._wi, self._ww, cw, max(nw, 1), self._wkey, self._whist, key,
+                               hist)
         self._wkey, self._whist, self._nw[0] = key, hist, cw
         self._xref[:] = x
         self.stats["rebuilds"] += 1
@@ -180,11 +176,11 @@ class ImplicitIntegrator(Integrator):
         f = np.zeros_like(x)
         t = np.zeros_like(x)
         wf = np.zeros((len(self._w_point), 3))
-        K.contact_forces(x, v, w, sim.dt, self._radius, b.mass, b.material, self._law_kind,
-                         sim._pair_model, sim._pair_params, self._w_point, self._w_normal,
-                         self._w_mat,
-                         self._pi, self._pj, int(self._np[0]), self._phist, self._wi, self._ww,
-                         int(self._nw[0]), self._whist, f, t, wf)
+        self._K.contact_forces(x, v, w, sim.dt, self._radius, b.mass, b.material,
+                               sim._pair_model, sim._pair_params, self._w_point,
+                               self._w_normal, self._w_mat, self._pi, self._pj,
+                               int(self._np[0]), self._phist, self._wi, self._ww,
+                               int(self._nw[0]), self._whist, f, t, wf)
         f += b.mass[:, None] * sim.gravity
         return f, t, wf
 
@@ -227,14 +223,13 @@ class ImplicitIntegrator(Integrator):
         d[4] = 0.0
         while done < n:
             d[0] = K.STATUS_OK
-            K.implicit_steps(
+            self._K.implicit_steps(
                 n - done, self.scheme, sim.dt, sim.gravity, tol,
                 self.stall_tolerance * self._rmin, self.max_iterations,
                 self.gs_tolerance * tol, self.gs_max_sweeps, sim.max_overlap, self.theta,
                 b.position, b.velocity, b.orientation, b.angular_velocity, b.force, b.torque,
-                sim._aux, self._radius, b.mass, self._inertia, b.material, self._law_kind,
-                sim._pair_model, sim._pair_params, self._w_point, self._w_normal, self._w_mat,
-                self._w_force,
+                sim._aux, self._radius, b.mass, self._inertia, b.material, sim._pair_model,
+                sim._pair_params, self._w_point, self._w_normal, self._w_mat, self._w_force,
                 self._pi, self._pj, self._np, self._pkey, self._phist, self._wi, self._ww,
                 self._nw, self._wkey, self._whist, self._xref, self._margin, self._work,
                 np.zeros(1, np.int64), log[done:], stats, d)

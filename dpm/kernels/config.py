@@ -51,6 +51,18 @@ assert N_PAIR_PARAMS == 8  # pair_row spells the slots out
 
 
 @inline_jit
+def pair_row16(pair_params, a, b):
+    """:func:`pair_row` for the scenes whose composed laws need more than 8 slots (their
+    table is 16 wide)."""
+    return (pair_params[a, b, 0], pair_params[a, b, 1], pair_params[a, b, 2],
+            pair_params[a, b, 3], pair_params[a, b, 4], pair_params[a, b, 5],
+            pair_params[a, b, 6], pair_params[a, b, 7], pair_params[a, b, 8],
+            pair_params[a, b, 9], pair_params[a, b, 10], pair_params[a, b, 11],
+            pair_params[a, b, 12], pair_params[a, b, 13], pair_params[a, b, 14],
+            pair_params[a, b, 15])
+
+
+@inline_jit
 def row18(a, k):
     """Row ``k`` of an (n, 18) array as a tuple (a boundary frame row; see
     :func:`pair_row` for why a tuple and not the view ``a[k]``)."""

@@ -33,10 +33,11 @@ of normal n = (x_i - x_j)/d, overlap delta = r_i + r_j - d, normal force f_n(del
 
 The linear system is solved by block Gauss-Seidel sweeps (3x3 diagonal blocks inverted),
 the Jacobian and residual are rebuilt every Newton iteration, and contacts are re-detected
-at every iteration from a candidate list (pairs within a margin, built with a cell list
-and kept while no body moved more than half the margin), so a contact that starts during
-a step acts during that step (DPM thesis §3.8.1). Convergence: a full Newton correction with
-max |dx| below ``tol`` (absolute, metres) for every body. A correction that raises the
+at every iteration from a candidate list (pairs within a margin, built by the explicit
+step's neighbour list builder and kept while no body moved more than half the margin), so
+a contact that starts during a step acts during that step (DPM thesis §3.8.1).
+Convergence: a full Newton correction with max |dx| below ``tol`` (absolute, metres) for
+every body. A correction that raises the
 residual sum_i |R_i / m_i|^2 (a contact or a dashpot cut-off switching inside the step
 makes Newton cycle) is halved, up to 6 times (backtracking line search; each halving
 counts as an iteration). Where even 1/64 of the step raises the residual, the residual
@@ -45,7 +46,9 @@ may not exist); the iterate is then accepted if the last correction is below
 ``stall_tol`` (counted in ``stats[4]``). A step that does not converge within
 ``max_iter`` iterations stops the run with status 5.
 
-Tangential forces (spring with history, Coulomb limit) come from the contact law at the
+The contact laws are the scene's, composed from their parts in the bindings block that
+:func:`dpm.plan.implicit_module` writes (``pair_force``; ``pair_normal`` for k and c).
+Tangential forces and rolling torques come from the contact law at the
 current iterate with the history of the step start; they enter the residual but not the
 Jacobian (a fixed-point part of the iteration). Rotation is not solved implicitly: the
 contacts see omega* = omega_n + dt T_n / I during the iterations, and after convergence
@@ -61,11 +64,68 @@ import math
 
 import numpy as np
 
-from .config import jit
-from .law_hertz_mindlin import hertz_mindlin
-from .law_hooke import hooke
-from .law_linear import linear_spring_dashpot
+# ruff: noqa: I001  (the bindings block must stay between its markers)
+from .config import inline_jit, step_jit as jit
+from .neighbours import build_neighbour_list
 from .rigid_rotation import rotate_isotropic
+
+# --- bindings begin (dpm.plan rewrites this block) ---
+from .config import pair_row
+from .law_linear import linear_normal as normal_0
+from .tangential import linear_tangential as tangential_0
+from .law_hertz_mindlin import hertz_tsuji_normal as normal_1
+from .tangential import mindlin_tsuji_tangential as tangential_1
+
+ROLLING = False
+
+
+@inline_jit
+def law_0(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt, hist, k):
+    """linear_spring_dashpot: LinearNormal x LinearTangential."""
+    fn, kn = normal_0((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
+    ftx, fty, ftz = tangential_0((p[2], p[3], p[4]), fn, kn, delta, vtx, vty, vtz, nx, ny, nz,
+            meff, reff, dt, hist, k, 0)
+    return fn, ftx, fty, ftz, 0.0, 0.0, 0.0
+
+
+@inline_jit
+def normal_law_0(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k):
+    fn, kn = normal_0((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
+    return fn
+
+
+@inline_jit
+def law_1(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt, hist, k):
+    """hertz_mindlin: HertzTsujiNormal x MindlinTsujiTangential."""
+    fn, kn = normal_1((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
+    ftx, fty, ftz = tangential_1((p[2], p[1], p[3]), fn, kn, delta, vtx, vty, vtz, nx, ny, nz,
+            meff, reff, dt, hist, k, 0)
+    return fn, ftx, fty, ftz, 0.0, 0.0, 0.0
+
+
+@inline_jit
+def normal_law_1(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k):
+    fn, kn = normal_1((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
+    return fn
+
+
+@inline_jit
+def pair_force(model, p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt,
+        hist, k):
+    """F_n, F_t, rolling torque of the contact law ``model`` of this scene."""
+    if model == 0:
+        return law_0(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt,
+                hist, k)
+    return law_1(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt, hist, k)
+
+
+@inline_jit
+def pair_normal(model, p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k):
+    """The normal force F_n of the contact law ``model`` of this scene."""
+    if model == 0:
+        return normal_law_0(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k)
+    return normal_law_1(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k)
+# --- bindings end ---
 
 STATUS_OK = 0
 STATUS_NAN = 2
@@ -77,108 +137,42 @@ BACKWARD_EULER = 0
 NEWMARK = 1
 NUMEROV = 2
 
-#: contact-law kinds this module can call (index in ``law_kind``)
-LAW_LINEAR = 0
-LAW_HERTZ_MINDLIN = 1
-LAW_HOOKE = 2
-
-
 @jit
-def call_law(kind, p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
-    if kind == LAW_HERTZ_MINDLIN:
-        return hertz_mindlin(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k)
-    if kind == LAW_HOOKE:
-        return hooke(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k)
-    return linear_spring_dashpot(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt,
-                                 hist, k)
-
-
-@jit
-def normal_derivatives(kind, p, delta, ddelta, nx, ny, nz, meff, reff, dt, fn, scratch):
-    """(df_n/d delta, df_n/d delta') by forward differences of the law (no tangential
-    motion, a throw-away history row)."""
+def normal_derivatives(model, p, delta, ddelta, nx, ny, nz, meff, reff, dt, fn, scratch,
+                       hist0, k):
+    """(df_n/d delta, df_n/d delta') by forward differences of the law's normal part (and
+    adhesion), on a throw-away copy of the contact's history at the step start (a
+    hysteretic normal part then differentiates the branch it is on)."""
     h = 1e-7 * delta + 1e-300
     for c in range(scratch.shape[1]):
-        scratch[0, c] = 0.0
-    f1, _, _, _ = call_law(kind, p, delta + h, ddelta, 0.0, 0.0, 0.0, nx, ny, nz, meff, reff,
-                           dt, scratch, 0)
+        scratch[0, c] = hist0[k, c]
+    f1 = pair_normal(model, p, delta + h, ddelta, nx, ny, nz, meff, reff, dt, scratch, 0)
     kx = (f1 - fn) / h
     hv = 1e-7 * abs(ddelta) + 1e-9 * delta / max(dt, 1e-300) + 1e-300
     for c in range(scratch.shape[1]):
-        scratch[0, c] = 0.0
-    f2, _, _, _ = call_law(kind, p, delta, ddelta + hv, 0.0, 0.0, 0.0, nx, ny, nz, meff, reff,
-                           dt, scratch, 0)
+        scratch[0, c] = hist0[k, c]
+    f2 = pair_normal(model, p, delta, ddelta + hv, nx, ny, nz, meff, reff, dt, scratch, 0)
     cv = (f2 - fn) / hv
     return max(kx, 0.0), max(cv, 0.0)
 
 
 @jit
-def candidate_pairs(x, radius, margin, out_i, out_j):
-    """Pairs (i < j) with |x_i - x_j| < r_i + r_j + margin, by a cell list; returns how many
-    there are (only the first ``len(out_i)`` are written)."""
-    n = x.shape[0]
-    if n < 2:
-        return 0
-    rmax = 0.0
-    lo = np.empty(3)
-    hi = np.empty(3)
-    for d in range(3):
-        lo[d] = x[0, d]
-        hi[d] = x[0, d]
-    for i in range(n):
-        rmax = max(rmax, radius[i])
-        for d in range(3):
-            lo[d] = min(lo[d], x[i, d])
-            hi[d] = max(hi[d], x[i, d])
-    cell = 2.0 * rmax + margin
-    dims = np.empty(3, np.int64)
-    total = 1
-    for d in range(3):
-        dims[d] = int((hi[d] - lo[d]) / cell) + 1
-        total *= dims[d]
-    while total > 8 * n + 64:  # sparse scene: coarser cells
-        cell *= 2.0
-        total = 1
-        for d in range(3):
-            dims[d] = int((hi[d] - lo[d]) / cell) + 1
-            total *= dims[d]
-    key = np.empty(n, np.int64)
-    for i in range(n):
-        cx = min(int((x[i, 0] - lo[0]) / cell), dims[0] - 1)
-        cy = min(int((x[i, 1] - lo[1]) / cell), dims[1] - 1)
-        cz = min(int((x[i, 2] - lo[2]) / cell), dims[2] - 1)
-        key[i] = (cx * dims[1] + cy) * dims[2] + cz
-    order = np.argsort(key)
-    start = np.zeros(total + 1, np.int64)
-    for i in range(n):
-        start[key[i] + 1] += 1
-    for c in range(total):
-        start[c + 1] += start[c]
-    count = 0
-    cap = out_i.shape[0]
-    for i in range(n):
-        c = key[i]
-        cz = c % dims[2]
-        cy = (c // dims[2]) % dims[1]
-        cx = c // (dims[1] * dims[2])
-        for ax in range(max(cx - 1, 0), min(cx + 2, dims[0])):
-            for ay in range(max(cy - 1, 0), min(cy + 2, dims[1])):
-                for az in range(max(cz - 1, 0), min(cz + 2, dims[2])):
-                    cc = (ax * dims[1] + ay) * dims[2] + az
-                    for s in range(start[cc], start[cc + 1]):
-                        j = order[s]
-                        if j <= i:
-                            continue
-                        dx = x[i, 0] - x[j, 0]
-                        dy = x[i, 1] - x[j, 1]
-                        dz = x[i, 2] - x[j, 2]
-                        lim = radius[i] + radius[j] + margin
-                        if dx * dx + dy * dy + dz * dz < lim * lim:
-                            if count < cap:
-                                out_i[count] = i
-                                out_j[count] = j
-                            count += 1
-    return count
+def candidate_pairs(x, radius, owner, margin, nl_start, nl_j, nl_hist, nl_active, t_start,
+                    t_pair, period):
+    """Pairs (i < j) with |x_i - x_j| < r_i + r_j + margin in the explicit step's half
+    neighbour list (CSR, history merged; :func:`.neighbours.build_neighbour_list`, called
+    here so that it is cached with this module); returns how many (above the capacity
+    nothing is changed)."""
+    return build_neighbour_list(x, radius, owner, margin, nl_start, nl_j, nl_hist, nl_active,
+                                t_start, t_pair, period)
+
+
+@jit
+def pair_rows(nl_start, pi):
+    """pi[k] = i for the pairs k of element i (the CSR list expanded)."""
+    for i in range(nl_start.shape[0] - 1):
+        for k in range(nl_start[i], nl_start[i + 1]):
+            pi[k] = i
 
 
 @jit
@@ -225,7 +219,7 @@ def sort_and_merge(ci, cj, count, nkey, old_key, old_hist, new_key, new_hist):
 
 
 @jit
-def evaluate(x, v, w, dt, beta_dt2, gamma_dt, radius, mass, mat, law_kind, pair_model,
+def evaluate(x, v, w, dt, beta_dt2, gamma_dt, radius, mass, mat, pair_model,
              pair_params, w_point, w_normal, w_mat, pi, pj, npair, p_hist0, p_hist, wi, ww, nwall,
              w_hist0, w_hist, force, torque, w_force, blk, blk_i, blk_j, diag, scratch, p_seen,
              w_seen):
@@ -306,12 +300,13 @@ def evaluate(x, v, w, dt, beta_dt2, gamma_dt, radius, mass, mat, law_kind, pair_
         vn = vx * nx + vy * ny + vz * nz
         mi = mat[i]
         mj = mat[j]
-        p = pair_params[mi, mj]
-        kind = law_kind[pair_model[mi, mj]]
+        p = pair_row(pair_params, mi, mj)
+        model = pair_model[mi, mj]
         meff = mass[i] * mass[j] / (mass[i] + mass[j])
         reff = ri * rj / rs
-        fn, ftx, fty, ftz = call_law(kind, p, delta, -vn, vx - vn * nx, vy - vn * ny,
-                                     vz - vn * nz, nx, ny, nz, meff, reff, dt, p_hist, k)
+        fn, ftx, fty, ftz, rx, ry, rz = pair_force(
+            model, p, delta, -vn, vx - vn * nx, vy - vn * ny, vz - vn * nz, nx, ny, nz, meff,
+            reff, w[i, 0] - w[j, 0], w[i, 1] - w[j, 1], w[i, 2] - w[j, 2], dt, p_hist, k)
         fx = fn * nx + ftx
         fy = fn * ny + fty
         fz = fn * nz + ftz
@@ -327,8 +322,15 @@ def evaluate(x, v, w, dt, beta_dt2, gamma_dt, radius, mass, mat, law_kind, pair_
         torque[j, 0] -= ajy * fz - ajz * fy
         torque[j, 1] -= ajz * fx - ajx * fz
         torque[j, 2] -= ajx * fy - ajy * fx
-        kx, cv = normal_derivatives(kind, p, delta, -vn, nx, ny, nz, meff, reff, dt, fn,
-                                    scratch)
+        if ROLLING:
+            torque[i, 0] += rx
+            torque[i, 1] += ry
+            torque[i, 2] += rz
+            torque[j, 0] -= rx
+            torque[j, 1] -= ry
+            torque[j, 2] -= rz
+        kx, cv = normal_derivatives(model, p, delta, -vn, nx, ny, nz, meff, reff, dt, fn,
+                                    scratch, p_hist0, k)
         s = beta_dt2 * kx + gamma_dt * cv
         p_seen[k] = max(p_seen[k], s)
         g = beta_dt2 * fn / dist
@@ -381,10 +383,11 @@ def evaluate(x, v, w, dt, beta_dt2, gamma_dt, radius, mass, mat, law_kind, pair_
         vn = vx * nx + vy * ny + vz * nz
         mi = mat[i]
         mw = w_mat[q]
-        p = pair_params[mi, mw]
-        kind = law_kind[pair_model[mi, mw]]
-        fn, ftx, fty, ftz = call_law(kind, p, delta, -vn, vx - vn * nx, vy - vn * ny,
-                                     vz - vn * nz, nx, ny, nz, mass[i], ri, dt, w_hist, k)
+        p = pair_row(pair_params, mi, mw)
+        model = pair_model[mi, mw]
+        fn, ftx, fty, ftz, rx, ry, rz = pair_force(
+            model, p, delta, -vn, vx - vn * nx, vy - vn * ny, vz - vn * nz, nx, ny, nz,
+            mass[i], ri, w[i, 0], w[i, 1], w[i, 2], dt, w_hist, k)
         fx = fn * nx + ftx
         fy = fn * ny + fty
         fz = fn * nz + ftz
@@ -397,8 +400,12 @@ def evaluate(x, v, w, dt, beta_dt2, gamma_dt, radius, mass, mat, law_kind, pair_
         torque[i, 0] += ay * fz - az * fy
         torque[i, 1] += az * fx - ax * fz
         torque[i, 2] += ax * fy - ay * fx
-        kx, cv = normal_derivatives(kind, p, delta, -vn, nx, ny, nz, mass[i], ri, dt, fn,
-                                    scratch)
+        if ROLLING:  # (a fixed plane: the relative angular velocity is the body's)
+            torque[i, 0] += rx
+            torque[i, 1] += ry
+            torque[i, 2] += rz
+        kx, cv = normal_derivatives(model, p, delta, -vn, nx, ny, nz, mass[i], ri, dt, fn,
+                                    scratch, w_hist0, k)
         s = beta_dt2 * kx + gamma_dt * cv
         w_seen[k] = max(w_seen[k], s)
         diag[i, 0] += s * nx * nx
@@ -486,8 +493,7 @@ def gauss_seidel(res, mass, diag, blk, blk_i, blk_j, nb, dx, ptr, adj, dinv, tol
 @jit
 def implicit_steps(nsteps, scheme, dt, gravity, tol, stall_tol, max_iter, gs_tol, gs_max,
                    max_overlap, theta, x, v, q, w, force, torque, aux, radius, mass, inertia,
-                   mat, law_kind,
-                   pair_model, pair_params, w_point, w_normal, w_mat, w_force,
+                   mat, pair_model, pair_params, w_point, w_normal, w_mat, w_force,
                    pi, pj, npair_arr, p_key, p_hist, wi, ww, nwall_arr, w_key, w_hist,
                    x_ref, margin, work, iwork, it_log, stats, diag):
     """Advance up to ``nsteps`` steps; stop early with a status in ``diag[0]``.
@@ -575,9 +581,9 @@ def implicit_steps(nsteps, scheme, dt, gravity, tol, stall_tol, max_iter, gs_tol
             for i in range(n):
                 for d in range(3):
                     vn[i, d] = vs[i, d] + gamma / (beta * dt) * (xn[i, d] - xs[i, d])
-            nb, worst = evaluate(xn, vn, ws, dt, bdt2, gdt, radius, mass, mat, law_kind,
-                                 pair_model, pair_params, w_point, w_normal, w_mat, pi, pj,
-                                 npair, p_hist, p_hist_new, wi, ww, nwall, w_hist, w_hist_new,
+            nb, worst = evaluate(xn, vn, ws, dt, bdt2, gdt, radius, mass, mat, pair_model,
+                                 pair_params, w_point, w_normal, w_mat, pi, pj, npair,
+                                 p_hist, p_hist_new, wi, ww, nwall, w_hist, w_hist_new,
                                  fc, tc, wfo, blk, blk_i, blk_j, diagb, scratch, p_seen,
                                  w_seen)
             rnorm = 0.0
@@ -683,7 +689,7 @@ def implicit_steps(nsteps, scheme, dt, gravity, tol, stall_tol, max_iter, gs_tol
 
 
 @jit
-def contact_forces(x, v, w, dt, radius, mass, mat, law_kind, pair_model, pair_params, w_point,
+def contact_forces(x, v, w, dt, radius, mass, mat, pair_model, pair_params, w_point,
                    w_normal, w_mat, pi, pj, npair, p_hist, wi, ww, nwall, w_hist, force, torque,
                    w_force):
     """Contact forces and torques at (x, v, w) with the histories unchanged (gravity not
@@ -697,7 +703,7 @@ def contact_forces(x, v, w, dt, radius, mass, mat, law_kind, pair_model, pair_pa
     ph = np.empty_like(p_hist)
     wh = np.empty_like(w_hist)
     scratch = np.zeros((1, p_hist.shape[1]))
-    evaluate(x, v, w, dt, 0.0, 0.0, radius, mass, mat, law_kind, pair_model, pair_params,
+    evaluate(x, v, w, dt, 0.0, 0.0, radius, mass, mat, pair_model, pair_params,
              w_point, w_normal, w_mat, pi, pj, npair, p_hist, ph, wi, ww, nwall, w_hist, wh,
              force, torque, w_force, blk, blk_i, blk_j, diagb, scratch, np.zeros(max(npair, 1)),
              np.zeros(max(nwall, 1)))

@@ -9,23 +9,23 @@ A [s] is a material constant; the restitution then falls with impact speed,
 Tangential: Mindlin no-slip spring k_t = 8 G* sqrt(R* delta) with history, optional dashpot
 c_t = 2 zeta_t sqrt(m* k_t), Coulomb limit mu F_n (:mod:`.tangential`).
 
-pair_params row: [E*, G*, A, mu, zeta_t, (rolling), rolling model, mu_r]
+Slots: normal (E*, A); tangential :func:`.tangential.mindlin_tangential` (G*, mu, zeta_t).
+Normal part (:class:`dpm.impact.parts.NormalPart`):
+``f(q, delta, ddelta, meff, reff, dt, hist, k, h) -> (F_n, k_n)``, q its slots of the pair
+row, h the offset of its history in ``hist[k]``; k_n the stiffness a tangential part may
+scale with.
 """
 
 import math
 
 from .config import inline_jit
-from .tangential import spring_coulomb
 
 
 @inline_jit
-def hertz_brilliantov(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
-    """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
+def brilliantov_normal(q, delta, ddelta, meff, reff, dt, hist, k, h):
+    """F_n = max(0, 4/3 E* sqrt(R* d) (d + A d')); q = (E*, A); k_n = 2 E* sqrt(R* d)."""
     a = math.sqrt(reff * delta)
-    fn = 4.0 / 3.0 * p[0] * a * (delta + p[2] * ddelta)
+    fn = 4.0 / 3.0 * q[0] * a * (delta + q[1] * ddelta)
     if fn < 0.0:
         fn = 0.0
-    kt = 8.0 * p[1] * a
-    ct = 2.0 * p[4] * math.sqrt(kt * meff)
-    ftx, fty, ftz = spring_coulomb(kt, ct, p[3], fn, vtx, vty, vtz, nx, ny, nz, dt, hist, k)
-    return fn, ftx, fty, ftz
+    return fn, 2.0 * q[0] * a

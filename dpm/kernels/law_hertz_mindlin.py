@@ -18,28 +18,30 @@ spring then pulls the force below the limit while the contact slides: an oblique
 in the sliding regime, tan(psi) = 8 x the sticking limit, lost 11 % of its friction impulse
 at e = 0.5.)
 
-pair_params row: [E*, G*, beta, mu, 0, 0, rolling model, mu_r]
-(slots 6, 7: rolling resistance model and coefficient, read by the step)
+Slots: normal (E*, beta); tangential :func:`.tangential.mindlin_tsuji_tangential`
+(G*, beta, mu): the two share the slot beta.
+Normal part (:class:`dpm.impact.parts.NormalPart`):
+``f(q, delta, ddelta, meff, reff, dt, hist, k, h) -> (F_n, k_n)``, q its slots of the pair
+row, h the offset of its history in ``hist[k]``; k_n the stiffness a tangential part may
+scale with.
 """
 
 import math
 
 from .config import inline_jit
-from .tangential import spring_coulomb
 
 SQRT_5_6 = math.sqrt(5.0 / 6.0)
 
 
 @inline_jit
-def hertz_mindlin(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
-    """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
+def hertz_tsuji_normal(q, delta, ddelta, meff, reff, dt, hist, k, h):
+    """F_n = max(0, 4/3 E* a d + 2 sqrt(5/6) beta sqrt(2 E* a m*) d'), a = sqrt(R* d);
+    q = (E*, beta); k_n = S_n = 2 E* a."""
     a = math.sqrt(reff * delta)
-    kn = 4.0 / 3.0 * p[0] * a
-    cn = 2.0 * SQRT_5_6 * p[2] * math.sqrt(2.0 * p[0] * a * meff)
+    kn = 4.0 / 3.0 * q[0] * a
+    sn = 2.0 * q[0] * a
+    cn = 2.0 * SQRT_5_6 * q[1] * math.sqrt(sn * meff)
     fn = kn * delta + cn * ddelta
     if fn < 0.0:
         fn = 0.0
-    kt = 8.0 * p[1] * a
-    ct = 2.0 * SQRT_5_6 * p[2] * math.sqrt(kt * meff)
-    ftx, fty, ftz = spring_coulomb(kt, ct, p[3], fn, vtx, vty, vtz, nx, ny, nz, dt, hist, k)
-    return fn, ftx, fty, ftz
+    return fn, sn

@@ -7,23 +7,24 @@ Tangential as the linear spring-dashpot (:mod:`.law_linear`):
 (kappa = 0 gives the thesis' purely viscous F_t = min(c_t |v_t|, mu F_n)).
 R* and m* are the contact's own, so the stiffness follows the size of each pair.
 
-pair_params row: [E*, zeta, mu, kappa, zeta_t, (rolling), rolling model, mu_r]
+Slots: normal (E*, zeta); tangential :func:`.tangential.linear_tangential`.
+Normal part (:class:`dpm.impact.parts.NormalPart`):
+``f(q, delta, ddelta, meff, reff, dt, hist, k, h) -> (F_n, k_n)``, q its slots of the pair
+row, h the offset of its history in ``hist[k]``; k_n the stiffness a tangential part may
+scale with.
 """
 
 import math
 
 from .config import inline_jit
-from .tangential import spring_coulomb
 
 
 @inline_jit
-def hooke(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
-    """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
-    kn = 4.0 / 3.0 * p[0] * reff
+def hooke_normal(q, delta, ddelta, meff, reff, dt, hist, k, h):
+    """k_n = 4/3 E* R*, F_n = max(0, k_n d + 2 zeta sqrt(m* k_n) d'); q = (E*, zeta)."""
+    kn = 4.0 / 3.0 * q[0] * reff
     sq = math.sqrt(meff * kn)
-    fn = kn * delta + 2.0 * p[1] * sq * ddelta
+    fn = kn * delta + 2.0 * q[1] * sq * ddelta
     if fn < 0.0:
         fn = 0.0
-    ftx, fty, ftz = spring_coulomb(p[3] * kn, 2.0 * p[4] * sq, p[2], fn, vtx, vty, vtz,
-                                   nx, ny, nz, dt, hist, k)
-    return fn, ftx, fty, ftz
+    return fn, kn

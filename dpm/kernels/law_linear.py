@@ -10,25 +10,24 @@ The damping ratio zeta is solved in the object layer so that the restitution coe
 e = exp(-beta t_c), t_c = (pi - 2 atan(beta/omega)) / omega, beta = zeta omega_0,
 omega = omega_0 sqrt(1 - zeta^2)).
 
-pair_params row: [k_n, zeta, mu, kappa, zeta_t, 0, rolling model, mu_r]
-(slots 6, 7: rolling resistance model and coefficient, read by the step)
+Slots: normal (k_n, zeta); tangential :func:`.tangential.linear_tangential`.
+Normal part (:class:`dpm.impact.parts.NormalPart`):
+``f(q, delta, ddelta, meff, reff, dt, hist, k, h) -> (F_n, k_n)``, q its slots of the pair
+row, h the offset of its history in ``hist[k]``; k_n the stiffness a tangential part may
+scale with.
 """
 
 import math
 
 from .config import inline_jit
-from .tangential import spring_coulomb
 
 
 @inline_jit
-def linear_spring_dashpot(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
-    """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
-    kn = p[0]
-    cn = 2.0 * p[1] * math.sqrt(meff * kn)
+def linear_normal(q, delta, ddelta, meff, reff, dt, hist, k, h):
+    """F_n = max(0, k_n d + 2 zeta sqrt(m* k_n) d'); q = (k_n, zeta); returns (F_n, k_n)."""
+    kn = q[0]
+    cn = 2.0 * q[1] * math.sqrt(meff * kn)
     fn = kn * delta + cn * ddelta
     if fn < 0.0:
         fn = 0.0
-    kt = p[3] * kn
-    ct = 2.0 * p[4] * math.sqrt(meff * kn)
-    ftx, fty, ftz = spring_coulomb(kt, ct, p[2], fn, vtx, vty, vtz, nx, ny, nz, dt, hist, k)
-    return fn, ftx, fty, ftz
+    return fn, kn

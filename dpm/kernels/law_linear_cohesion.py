@@ -9,20 +9,17 @@ Free equilibrium overlap: 4/3 E* sqrt(R*) delta^(3/2) = k_c pi R* delta, i.e.
     delta_eq = (3 pi k_c / (4 E*))^2 R*
 Tangential: Mindlin spring with history, Coulomb limit mu max(0, F_HM) (the repulsive part).
 
-pair_params row: [E*, G*, beta, mu, k_c, (rolling), rolling model, mu_r]
+Adhesion part (:class:`dpm.impact.parts.AdhesionPart`):
+``f(q, delta, ddelta, meff, reff, dt, hist, k, h) -> F_a``, subtracted from F_n after the
+tangential part saw the repulsive force. Slots: (k_c,).
 """
 
 import math
 
 from .config import inline_jit
-from .law_hertz_mindlin import hertz_mindlin
 
 
 @inline_jit
-def linear_cohesion(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
-    """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``:
-    the Hertz-Mindlin force (friction limited by its repulsive part) minus the cohesion
-    p[4] pi R* delta."""
-    frep, ftx, fty, ftz = hertz_mindlin(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff,
-                                        reff, dt, hist, k)
-    return frep - p[4] * math.pi * reff * delta, ftx, fty, ftz
+def linear_cohesion_adhesion(q, delta, ddelta, meff, reff, dt, hist, k, h):
+    """F_a = k_c pi R* d (the attraction; F_n = F_rep - F_a); q = (k_c,)."""
+    return q[0] * math.pi * reff * delta

@@ -10,23 +10,24 @@ Tangential spring-dashpot with slip history and Coulomb limit (eq. 2.33, 2.34):
     k_t = kappa k_n,  c_t = 2 zeta_t sqrt(m* k_t),  zeta_t = -ln e_t / sqrt(ln^2 e_t + pi^2)
 m* and R* are the contact's own: each pair gets the energy-equivalent spring of its size.
 
-pair_params row: [C, zeta, mu, kappa, zeta_t, (rolling), rolling model, mu_r]
+Slots: normal (C, zeta); tangential :func:`.tangential.maw_tangential`.
+Normal part (:class:`dpm.impact.parts.NormalPart`):
+``f(q, delta, ddelta, meff, reff, dt, hist, k, h) -> (F_n, k_n)``, q its slots of the pair
+row, h the offset of its history in ``hist[k]``; k_n the stiffness a tangential part may
+scale with.
 """
 
 import math
 
 from .config import inline_jit
-from .tangential import spring_coulomb
 
 
 @inline_jit
-def maw_linear_spring(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
-    """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
-    kn = p[0] * reff**0.4 * meff**0.2
-    fn = kn * delta + 2.0 * p[1] * math.sqrt(meff * kn) * ddelta
+def maw_normal(q, delta, ddelta, meff, reff, dt, hist, k, h):
+    """k_n = C R*^(2/5) m*^(1/5), F_n = max(0, k_n d + 2 zeta sqrt(m* k_n) d');
+    q = (C, zeta)."""
+    kn = q[0] * reff**0.4 * meff**0.2
+    fn = kn * delta + 2.0 * q[1] * math.sqrt(meff * kn) * ddelta
     if fn < 0.0:
         fn = 0.0
-    kt = p[3] * kn
-    ct = 2.0 * p[4] * math.sqrt(meff * kt)
-    ftx, fty, ftz = spring_coulomb(kt, ct, p[2], fn, vtx, vty, vtz, nx, ny, nz, dt, hist, k)
-    return fn, ftx, fty, ftz
+    return fn, kn

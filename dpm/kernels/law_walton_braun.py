@@ -10,30 +10,29 @@ The branch follows the largest overlap reached, not the sign of delta' (the thes
 Tangential as the linear spring-dashpot: k_t = kappa k_l, c_t = 2 zeta_t sqrt(m* k_l),
 history and Coulomb limit mu F_n.
 
-History: hist[k, 6] = delta_max, hist[k, 7] = delta_0 (zeroed when the contact opens).
-pair_params row: [k_l, k_ul, mu, kappa, zeta_t, (rolling), rolling model, mu_r]
+History: hist[k, h] = delta_max, hist[k, h + 1] = delta_0 (zeroed when the contact opens).
+Slots: normal (k_l, k_ul); tangential :func:`.tangential.linear_tangential`.
+Normal part (:class:`dpm.impact.parts.NormalPart`):
+``f(q, delta, ddelta, meff, reff, dt, hist, k, h) -> (F_n, k_n)``, q its slots of the pair
+row, h the offset of its history in ``hist[k]``; k_n the stiffness a tangential part may
+scale with.
 """
 
-import math
-
 from .config import inline_jit
-from .tangential import spring_coulomb
 
 
 @inline_jit
-def walton_braun(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
-    """Return (F_n, F_t x, y, z) on element i for overlap ``delta`` and rate ``ddelta``."""
-    kl = p[0]
-    kul = p[1]
-    dmax = hist[k, 6]
+def walton_braun_normal(q, delta, ddelta, meff, reff, dt, hist, k, h):
+    """Hysteretic normal force; q = (k_l, k_ul), history (d_max, d_0); k_n = k_l."""
+    kl = q[0]
+    kul = q[1]
+    dmax = hist[k, h]
     if delta >= dmax:
-        hist[k, 6] = delta
+        hist[k, h] = delta
         fn = kl * delta
-        hist[k, 7] = delta * (1.0 - kl / kul)
+        hist[k, h + 1] = delta * (1.0 - kl / kul)
     else:
-        fn = kul * (delta - hist[k, 7])
+        fn = kul * (delta - hist[k, h + 1])
         if fn < 0.0:
             fn = 0.0
-    ftx, fty, ftz = spring_coulomb(p[3] * kl, 2.0 * p[4] * math.sqrt(meff * kl), p[2], fn,
-                                   vtx, vty, vtz, nx, ny, nz, dt, hist, k)
-    return fn, ftx, fty, ftz
+    return fn, kl

@@ -1,4 +1,10 @@
-"""Rolling resistance torques, chosen per material pair by ``pair_params[a, b, 6]``.
+"""Rolling resistance parts, and the torque of monolithic laws' fixed slots 5-7.
+
+:func:`constant_torque` and :func:`epsd` are the numba functions of the rolling parts
+(:class:`dpm.impact.parts.RollingPart`), called by a composed law as
+``f(q, fn, reff, meff, wx, wy, wz, dt, hist, k, h) -> torque on i`` (q: the part's slots of
+the pair row, h: the offset of its history). :func:`rolling_torque` serves monolithic laws
+(``ImpactModel.kernel``): their pair row carries the model in slot 6.
 
 Model 1, constant torque (DPM thesis eq. 2.53 with the unit vector, Zhou et al. 1999):
     T_r = -mu_r F_n R* w_rel / |w_rel|,   w_rel = w_i - w_j
@@ -14,8 +20,9 @@ Powder Technol. 206, 269; Iwashita & Oda 1998 for the spring):
     T_r  = M_k + M_d
 Under full mobilisation it is the constant torque of model 1; below it a spring that holds a
 static moment, so a sphere on a slope tan(theta) < mu_r and a heap come to rest.
-``pair_params`` slot 5 holds k_n (a representative normal stiffness from the impact model),
-slot 6 holds 2 + eta_r (eta_r in [0, 1)), slot 7 mu_r; history slots 3..5 hold M_k.
+Part slots: constant torque (mu_r); EPSD (mu_r, k_n, eta_r), k_n a representative normal
+stiffness from the impact model's normal part; history: M_k (3 floats). Monolithic laws:
+slot 5 k_n, slot 6 the model (2 + eta_r for EPSD), slot 7 mu_r; history 3..5 M_k.
 The kernel sees the whole relative angular velocity (the contact normal is not passed), so
 the spring also resists twisting, as model 1 does.
 """
@@ -30,35 +37,49 @@ ROLLING_EPSD = 2
 
 
 @inline_jit
+def constant_torque(q, fn, reff, meff, wx, wy, wz, dt, hist, k, h):
+    """Model 1: T_r = -mu_r F_n R* w_rel / |w_rel|. q = (mu_r,)."""
+    w = math.sqrt(wx * wx + wy * wy + wz * wz)
+    if w == 0.0 or fn <= 0.0:
+        return 0.0, 0.0, 0.0
+    t = q[0] * fn * reff / w
+    return -t * wx, -t * wy, -t * wz
+
+
+@inline_jit
+def epsd(q, fn, reff, meff, wx, wy, wz, dt, hist, k, h):
+    """Model 2, elastic-plastic spring-dashpot; q = (mu_r, k_n, eta_r), M_k in
+    ``hist[k, h:h+3]``."""
+    mu_r = q[0]
+    kr = 2.25 * mu_r * mu_r * reff * reff * q[1]
+    mx = hist[k, h] - kr * wx * dt
+    my = hist[k, h + 1] - kr * wy * dt
+    mz = hist[k, h + 2] - kr * wz * dt
+    mm = mu_r * reff * max(fn, 0.0)
+    mk = math.sqrt(mx * mx + my * my + mz * mz)
+    cr = 0.0
+    if mk >= mm:
+        if mk > 0.0:
+            r = mm / mk
+            mx *= r
+            my *= r
+            mz *= r
+    else:
+        cr = 2.0 * q[2] * math.sqrt(1.4 * meff * reff * reff * kr)
+    hist[k, h] = mx
+    hist[k, h + 1] = my
+    hist[k, h + 2] = mz
+    return mx - cr * wx, my - cr * wy, mz - cr * wz
+
+
+@inline_jit
 def rolling_torque(p, fn, reff, meff, wx, wy, wz, dt, hist, k):
-    """Torque (x, y, z) on element i's body from rolling resistance; j gets the opposite."""
+    """Torque (x, y, z) on element i's body from the rolling resistance of a monolithic
+    law's pair row ``p`` (model in slot 6); j gets the opposite."""
     model = int(p[6])
     if model == ROLLING_CONSTANT_TORQUE:
-        w = math.sqrt(wx * wx + wy * wy + wz * wz)
-        if w == 0.0 or fn <= 0.0:
-            return 0.0, 0.0, 0.0
-        t = p[7] * fn * reff / w
-        return -t * wx, -t * wy, -t * wz
+        return constant_torque((p[7],), fn, reff, meff, wx, wy, wz, dt, hist, k, 3)
     if model == ROLLING_EPSD:
-        mu_r = p[7]
-        kr = 2.25 * mu_r * mu_r * reff * reff * p[5]
-        mx = hist[k, 3] - kr * wx * dt
-        my = hist[k, 4] - kr * wy * dt
-        mz = hist[k, 5] - kr * wz * dt
-        mm = mu_r * reff * max(fn, 0.0)
-        mk = math.sqrt(mx * mx + my * my + mz * mz)
-        cr = 0.0
-        if mk >= mm:
-            if mk > 0.0:
-                r = mm / mk
-                mx *= r
-                my *= r
-                mz *= r
-        else:
-            eta = p[6] - ROLLING_EPSD
-            cr = 2.0 * eta * math.sqrt(1.4 * meff * reff * reff * kr)
-        hist[k, 3] = mx
-        hist[k, 4] = my
-        hist[k, 5] = mz
-        return mx - cr * wx, my - cr * wy, mz - cr * wz
+        return epsd((p[7], p[5], p[6] - ROLLING_EPSD), fn, reff, meff, wx, wy, wz, dt, hist, k,
+                    3)
     return 0.0, 0.0, 0.0

@@ -38,7 +38,7 @@ import numpy as np
 
 from numba import prange
 
-from .config import inline_jit, pair_row, row18, row20, step_jit as jit
+from .config import inline_jit, row18, row20, step_jit as jit
 from .config import step_pjit as pjit
 from .boundary_geometry import AXI, JOINED, TORUS, TRIANGLE, in_range, touching
 from .boundary_search import boundary_motion_since_rebuild, to_local, to_world
@@ -46,11 +46,13 @@ from .mesh_contact import resolve_triangle_contacts
 from .neighbours import _copy_back as copy_back, _merge as merge_history
 from .neighbours import build_neighbour_list, minimum_image
 from .rigid_rotation import rotate
-from .rolling import rolling_torque
 
 # --- bindings begin (dpm.plan rewrites this block) ---
-from .law_linear import linear_spring_dashpot as law_0
-from .law_hertz_mindlin import hertz_mindlin as law_1
+from .config import pair_row
+from .law_linear import linear_normal as normal_0
+from .tangential import linear_tangential as tangential_0
+from .law_hertz_mindlin import hertz_tsuji_normal as normal_1
+from .tangential import mindlin_tsuji_tangential as tangential_1
 from .integrate_velocity_verlet import pre_force_body, pre_force_sphere, post_force_body
 from .boundary_geometry import plane_distance
 
@@ -66,13 +68,55 @@ def closest(kind, p, x, y, z, r):
     d, nx, ny, nz = plane_distance(p, x, y, z)
     return d, nx, ny, nz, 0
 
+ROLLING = False
+
 
 @inline_jit
-def pair_force(model, p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k):
-    """Dispatch to the contact law ``model`` of this scene."""
+def law_0(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt, hist, k):
+    """linear_spring_dashpot: LinearNormal x LinearTangential."""
+    fn, kn = normal_0((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
+    ftx, fty, ftz = tangential_0((p[2], p[3], p[4]), fn, kn, delta, vtx, vty, vtz, nx, ny, nz,
+            meff, reff, dt, hist, k, 0)
+    return fn, ftx, fty, ftz, 0.0, 0.0, 0.0
+
+
+@inline_jit
+def normal_law_0(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k):
+    fn, kn = normal_0((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
+    return fn
+
+
+@inline_jit
+def law_1(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt, hist, k):
+    """hertz_mindlin: HertzTsujiNormal x MindlinTsujiTangential."""
+    fn, kn = normal_1((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
+    ftx, fty, ftz = tangential_1((p[2], p[1], p[3]), fn, kn, delta, vtx, vty, vtz, nx, ny, nz,
+            meff, reff, dt, hist, k, 0)
+    return fn, ftx, fty, ftz, 0.0, 0.0, 0.0
+
+
+@inline_jit
+def normal_law_1(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k):
+    fn, kn = normal_1((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
+    return fn
+
+
+@inline_jit
+def pair_force(model, p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt,
+        hist, k):
+    """F_n, F_t, rolling torque of the contact law ``model`` of this scene."""
     if model == 0:
-        return law_0(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k)
-    return law_1(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, dt, hist, k)
+        return law_0(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt,
+                hist, k)
+    return law_1(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt, hist, k)
+
+
+@inline_jit
+def pair_normal(model, p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k):
+    """The normal force F_n of the contact law ``model`` of this scene."""
+    if model == 0:
+        return normal_law_0(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k)
+    return normal_law_1(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k)
 # --- bindings end ---
 
 STATUS_OK = 0
@@ -296,8 +340,10 @@ def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_in
     p = pair_row(pair_params, mi, mj)
     reff = ri * rj / rs
     meff = 1.0 / ims
-    fn, ftx, fty, ftz = pair_force(pair_model[mi, mj], p, delta, -vn, vtx, vty, vtz,
-                                   nx, ny, nz, meff, reff, dt, nl_hist, kk)
+    fn, ftx, fty, ftz, rx, ry, rz = pair_force(
+        pair_model[mi, mj], p, delta, -vn, vtx, vty, vtz, nx, ny, nz, meff, reff,
+        b_angvel[bi, 0] - b_angvel[bj, 0], b_angvel[bi, 1] - b_angvel[bj, 1],
+        b_angvel[bi, 2] - b_angvel[bj, 2], dt, nl_hist, kk)
     fx = fn * nx + ftx
     fy = fn * ny + fty
     fz = fn * nz + ftz
@@ -307,11 +353,7 @@ def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_in
     tjx = -(ajy * fz - ajz * fy)
     tjy = -(ajz * fx - ajx * fz)
     tjz = -(ajx * fy - ajy * fx)
-    if p[6] != 0.0:
-        rx, ry, rz = rolling_torque(p, fn, reff, meff,
-                                    b_angvel[bi, 0] - b_angvel[bj, 0],
-                                    b_angvel[bi, 1] - b_angvel[bj, 1],
-                                    b_angvel[bi, 2] - b_angvel[bj, 2], dt, nl_hist, kk)
+    if ROLLING:  # (a constant of the scene: any law with rolling resistance)
         tix += rx
         tiy += ry
         tiz += rz
@@ -395,22 +437,18 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
         vtz = vz - vn * nz
         mw = w_mat[w]
         p = pair_row(pair_params, mi, mw)
-        fn, ftx, fty, ftz = pair_force(pair_model[mi, mw], p, delta, -vn, vtx, vty, vtz,
-                                       nx, ny, nz, b_mass[bi], ri, dt, wl_hist, q)
+        # the boundary's relative angular velocity is its frame's
+        fn, ftx, fty, ftz, rx, ry, rz = pair_force(
+            pair_model[mi, mw], p, delta, -vn, vtx, vty, vtz, nx, ny, nz, b_mass[bi], ri,
+            b_angvel[bi, 0] - f[15], b_angvel[bi, 1] - f[16], b_angvel[bi, 2] - f[17], dt,
+            wl_hist, q)
         fx = fn * nx + ftx
         fy = fn * ny + fty
         fz = fn * nz + ftz
         tx = ay * fz - az * fy
         ty = az * fx - ax * fz
         tz = ax * fy - ay * fx
-        # the boundary's relative angular velocity is its frame's
-        rx = 0.0
-        ry = 0.0
-        rz = 0.0
-        if p[6] != 0.0:
-            rx, ry, rz = rolling_torque(p, fn, ri, b_mass[bi], b_angvel[bi, 0] - f[15],
-                                        b_angvel[bi, 1] - f[16], b_angvel[bi, 2] - f[17],
-                                        dt, wl_hist, q)
+        if ROLLING:
             tx += rx
             ty += ry
             tz += rz
