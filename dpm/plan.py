@@ -380,6 +380,9 @@ def clear_cache() -> list[Path]:
     return removed
 
 
+from .impact.parts import history_flips  # noqa: E402  (the plan reads the parts' layouts)
+
+
 class ScenePlan:
     """What the scene needs from the kernels, resolved once per scene (:func:`plan_scene`):
     the contact laws in use and the material-pair tables (``pair_model[a, b]`` picks the
@@ -399,6 +402,8 @@ class ScenePlan:
         self.periodic = periodic
         self.moving = moving
         self.spheres_only = spheres_only
+        #: (laws, history width) bool: history floats negated when a pair swaps
+        self.history_flips = history_flips(laws, history_width)
 
     def module(self, fused: bool) -> ModuleType:
         """The generated step module of this scene for one force form."""

@@ -322,6 +322,12 @@ class Simulation:
             raise ParameterError(f"sim.permute(): the {self.integrator.name} integrator keeps "
                                  "its own contact state; permute before the first run")
         order = order.astype(np.int64)
+        flips = None
+        if self._prepared:  # which history floats of each pair change sign if it swaps
+            c, e = self.contacts, self.elements
+            rows = np.repeat(np.arange(len(c.start) - 1), np.diff(c.start))
+            model = self.plan.pair_model[e.material[rows], e.material[c.key[:c.count]]]
+            flips = self.plan.history_flips[model]
         new_body = np.empty(n, np.int64)
         new_body[order] = np.arange(n)
         elem_order = self.bodies.permute(order)
@@ -329,7 +335,7 @@ class Simulation:
         new_elem[elem_order] = np.arange(len(elem_order))
         self.elements.permute(elem_order, new_body)
         if self._prepared:
-            self.contacts.permute(new_elem)
+            self.contacts.permute(new_elem, flips)
             self.wall_contacts.permute(new_elem)
             self.backend.permute_bodies(order)
             if self.plan.spheres_only:

@@ -126,10 +126,6 @@ class Elements:
             setattr(self, name, np.ascontiguousarray(getattr(self, name)[order]))
 
 
-#: history slots 0..VECTOR_HISTORY-1 are vectors of element i relative to j (tangential and
-#: rolling springs): they change sign when a pair's order is reversed (:meth:`Contacts.permute`)
-VECTOR_HISTORY = 6
-
 #: partner keys and pair indices (element, primitive and pair numbers stay below 2**31):
 #: 4 bytes less per listed pair and per transposed entry than int64
 KEY_DTYPE = np.int32
@@ -298,18 +294,20 @@ class Contacts(_CsrList):
         super().keep_rows(keep, new_index, remap_keys)
         self.t_start = np.zeros(len(self.start), np.int64)
 
-    def permute(self, new_index: np.ndarray) -> None:
+    def permute(self, new_index: np.ndarray, flips: np.ndarray | None = None) -> None:
         """Elements were reordered (old element i is now ``new_index[i]``): every pair
         keeps its history and flag. A pair whose first element is now the larger index
-        is stored the other way round (the list holds j > i), and the vector slots of its
-        history (0-5: tangential and rolling springs, i relative to j) change sign; the
-        scalar slots (6-7, the normal law's state) stay."""
+        is stored the other way round (the list holds j > i), and the history floats
+        that are vectors of i relative to j (``flips[pair, slot]``, from the laws' parts:
+        the tangential and rolling springs) change sign; scalars (a normal law's plastic
+        overlap) stay. ``flips`` None: none change sign."""
         cnt = self.count
         i = new_index[self._rows_of()]
         j = new_index[self.key[:cnt]]
         hist = self.history[:cnt].copy()
-        flip = i > j
-        hist[flip, :min(VECTOR_HISTORY, hist.shape[1])] *= -1.0
+        if flips is not None:
+            swapped = (i > j)[:, None] & flips[:cnt, :hist.shape[1]]
+            hist[swapped] *= -1.0
         lo, hi = np.minimum(i, j), np.maximum(i, j)
         o = np.lexsort((hi, lo))
         self._set_entries(lo[o], hi[o], hist[o], self.active[:cnt][o], len(self.start) - 1)

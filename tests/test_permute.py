@@ -23,16 +23,21 @@ R = 1e-3
 GLASS = dict(density=2500, young=5e6, poisson=0.45)
 
 
-def _isolated_contacts(reverse_after: int | None, steps: int = 1600):
+def _isolated_contacts(reverse_after: int | None, steps: int = 1600,
+                       model: str = "hertz_mindlin"):
     """Pairs of spheres colliding obliquely with spin in free flight (tangential and
-    rolling springs, history slots 0-5) and spheres sliding on a floor (boundary
-    history); each body touches at most one thing at a time."""
+    rolling springs; Walton-Braun adds its plastic overlap, a scalar) and spheres sliding
+    on a floor (boundary history); each body touches at most one thing at a time."""
     sim = dpm.Simulation(dt=1e-6, gravity=(0, 0, -9.81), threads=1)
     g = dpm.Material("glass", **GLASS)
     s = dpm.Material("steel", density=7800, young=2e8, poisson=0.3)
-    law = dict(restitution=0.5, friction=0.4, rolling_friction=0.05, rolling_model="epsd")
-    sim.contact(g, g, model="hertz_mindlin", **law)
-    sim.contact(g, s, model="hertz_mindlin", **law)
+    law = dict(restitution=0.5, friction=0.4, rolling_friction=0.05)
+    if model == "walton_braun":
+        law = dict(stiffness=2e3, restitution=0.5, friction=0.4, rolling_friction=0.05)
+    else:
+        law["rolling_model"] = "epsd"
+    sim.contact(g, g, model=model, **law)
+    sim.contact(g, s, model=model, **law)
     sim.add_boundary("plane", material=s, point=(0, 0, 0), normal=(0, 0, 1))
     pos, vel, spin = [], [], []
     for k in range(6):  # colliding pairs, high above the floor
@@ -77,8 +82,9 @@ def test_permuting_mid_run_continues_bit_for_bit():
 
 
 def _pair_history(sim):
-    """{(id a, id b) with a < b: history of a relative to b} of the touching pairs."""
-    c, ids = sim.contacts, sim.bodies.id
+    """{(id a, id b) with a < b: history of a relative to b} of the touching pairs (the
+    vector floats, as the laws' parts declare them, negated where b is stored first)."""
+    c, ids, mat = sim.contacts, sim.bodies.id, sim.elements.material
     rows = np.repeat(np.arange(len(c.start) - 1), np.diff(c.start))
     out = {}
     for k in range(c.count):
@@ -87,20 +93,33 @@ def _pair_history(sim):
             h = c.history[k].copy()
             if a > b:
                 a, b = b, a
-                h[:6] *= -1.0
+                flips = sim.plan.history_flips[sim.plan.pair_model[mat[rows[k]],
+                                                                   mat[c.key[k]]]]
+                h[flips[:len(h)]] *= -1.0
             out[(a, b)] = h
     return out
 
 
-def test_each_contact_keeps_its_history():
-    sim = _isolated_contacts(None, steps=300)
+@pytest.mark.parametrize("model", ["hertz_mindlin", "walton_braun"])
+def test_each_contact_keeps_its_history(model):
+    sim = _isolated_contacts(None, steps=300, model=model)
+    flips = sim.plan.history_flips[0]
+    width = sim.contacts.history_width
+    if model == "walton_braun":  # tangential spring, then delta_max and delta_0 (scalars)
+        assert list(flips[:width]) == [True] * 3 + [False] * 2
+    else:  # tangential spring, rolling spring
+        assert list(flips[:width]) == [True] * 6
     before = _pair_history(sim)
     walls = {int(sim.bodies.id[sim.elements.owner[i]]): sim.wall_contacts.history[q].copy()
              for i in range(len(sim.elements))
              for q in range(sim.wall_contacts.start[i], sim.wall_contacts.start[i + 1])
              if sim.wall_contacts.active[q]}
-    assert len(before) == 6 and len(walls) == 5
-    assert all(np.any(h[:3] != 0) and np.any(h[3:6] != 0) for h in before.values())
+    assert len(before) == 6 and (len(walls) == 5 or model == "walton_braun")  # (it bounces)
+    assert all(np.any(h[:3] != 0) for h in before.values())
+    if model == "walton_braun":
+        assert all(h[3] > 0 for h in before.values())  # delta_max: must not be negated
+    else:
+        assert all(np.any(h[3:6] != 0) for h in before.values())
     order = np.random.default_rng(3).permutation(len(sim.bodies))
     sim.permute(order)
     assert _pair_history(sim).keys() == before.keys()

@@ -8,7 +8,11 @@ A part declares
 - ``slots``: the names of its constants in the pair row, in the order its numba function
   reads them (``q[0], q[1], ...``); parts of one model that name the same slot share it
   (and must give it the same value);
-- ``history``: how many history floats per contact it keeps;
+- ``history``: how many history floats per contact it keeps, and ``history_flips``:
+  whether they are vectors of element i relative to j (a spring), which change sign when
+  the pair is stored the other way round (:meth:`dpm.Simulation.permute`, migration
+  between ranks); True for tangential and rolling parts, False for normal and adhesion
+  parts (scalars such as a plastic overlap);
 - ``function``: its numba scalar function, ``("package.module", "name")`` or the
   ``inline_jit`` dispatcher itself;
 
@@ -63,6 +67,8 @@ class Part:
     parameters: ClassVar[dict[str, Parameter]] = {}
     slots: ClassVar[tuple[str, ...]] = ()
     history: ClassVar[int] = 0
+    #: the history floats are vectors of i relative to j (negated when i and j swap)
+    history_flips: ClassVar[bool] = False
     function: ClassVar[Any] = ("", "")
     needs_elastic_constants: ClassVar[bool] = False
 
@@ -113,6 +119,7 @@ class TangentialPart(Part):
     hist, k, h) -> (F_t x, y, z)``, fn the repulsive normal force (before adhesion)."""
 
     kind = "tangential"
+    history_flips = True
 
 
 class AdhesionPart(Part):
@@ -127,6 +134,7 @@ class RollingPart(Part):
     wz, dt, hist, k, h) -> (T x, y, z)``, w the relative angular velocity w_i - w_j."""
 
     kind = "rolling"
+    history_flips = True
 
 
 class ConstantTorque(RollingPart):
@@ -180,11 +188,15 @@ class Layout:
             raise ParameterError(f"a contact law with {self.width} pair constants; at most "
                                  f"{MAX_ROW}")
         self.offset: dict[str, int] = {}
+        #: per history float: negated when the pair's order is reversed
+        self.flips: list[bool] = []
         h = 0
         for kind in HISTORY_ORDER:
             if kind in by_kind:
                 self.offset[kind] = h
-                h += int(by_kind[kind].history)
+                n = int(by_kind[kind].history)
+                h += n
+                self.flips += [bool(by_kind[kind].history_flips)] * n
         self.history = h
 
     def indices(self, part: Part) -> tuple[int, ...]:
@@ -209,6 +221,22 @@ class LawSpec(tuple):
 
     def renamed(self, name: str) -> LawSpec:
         return LawSpec(self[0], name, self.parts)
+
+
+#: monolithic laws: history slots 0-5 are the tangential and rolling springs (vectors),
+#: 6-7 the normal law's state (scalars)
+MONOLITHIC_FLIPS = (True,) * 6 + (False,) * 2
+
+
+def history_flips(laws: list, width: int) -> np.ndarray:
+    """(laws, width) bool: which history floats of each law's contacts are negated when a
+    pair is stored the other way round."""
+    out = np.zeros((max(len(laws), 1), width), bool)
+    for k, spec in enumerate(laws):
+        flips = spec.layout.flips if isinstance(spec, LawSpec) else MONOLITHIC_FLIPS
+        n = min(len(flips), width)
+        out[k, :n] = flips[:n]
+    return out
 
 
 def pack_tables(contacts: dict, materials: list, context_of) -> tuple:
