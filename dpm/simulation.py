@@ -15,7 +15,14 @@ import numpy as np
 from . import diagnosis, population, scene_check
 from . import measures as _measures
 from . import plan as _plan
-from .backends.base import STATUS_NAN, STATUS_OK, STATUS_OVERLAP, Backend, StepResult
+from .backends.base import (
+    STATUS_INTEGRATOR,
+    STATUS_NAN,
+    STATUS_OK,
+    STATUS_OVERLAP,
+    Backend,
+    StepResult,
+)
 from .backends.cpu import SMALL_SCENE, default_threads  # noqa: F401  (public names)
 from .boundaries.base import Boundary
 from .boundaries.joints import join_pipe_ends
@@ -179,6 +186,10 @@ class Simulation:
         self.backend.threads = None if value is None else int(value)
 
     # ----------------------------------------------------------------- scene building
+    def material_index(self, m: Material) -> int:
+        """Index of material ``m`` in :attr:`materials` (added if new)."""
+        return self._material_index(m, "sim.material_index()")
+
     def _material_index(self, m: Material, call: str) -> int:
         if not isinstance(m, Material):
             raise ParameterError(f"{call}: material={m!r} must be a dpm.Material")
@@ -568,6 +579,8 @@ class Simulation:
         self._update_boundary_loads()
         if res.status == STATUS_NAN:
             self._fail("a position became NaN")
+        if res.status == STATUS_INTEGRATOR:
+            self._fail(self.integrator.failure)
         if res.status == STATUS_OVERLAP:
             self._fail(f"an overlap reached {res.worst_overlap:.3g} of the radius "
                        f"(max_overlap={self.max_overlap:g})"
@@ -615,23 +628,11 @@ class Simulation:
         """Touching contacts (particle pairs and particle-boundary) of the last step."""
         return self.backend.contact_count()
 
-    # ----------------------------------------------------------------- for integrators
-    # (the implicit integrators drive their own Newton loop on the host arrays)
     @property
     def _diag(self) -> np.ndarray:
+        """The backend's kernel diagnostics (old name, read by scripts: [6] is
+        :meth:`contact_count`)."""
         return self.backend.diag
-
-    @property
-    def _aux(self) -> np.ndarray:
-        return self.backend.aux
-
-    @property
-    def _pair_model(self) -> np.ndarray:
-        return self.plan.pair_model
-
-    @property
-    def _pair_params(self) -> np.ndarray:
-        return self.plan.pair_params
 
 
 def _rows(call: str, name: str, value: Any, width: int, n: int | None = None) -> np.ndarray:

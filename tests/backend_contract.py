@@ -304,7 +304,7 @@ def run(name: str, backend: dict, **variant) -> dict[str, np.ndarray]:
     out["boundary_force"] = np.array(force).reshape(SAMPLES, -1, 3)
     out["boundary_torque"] = np.array(torque).reshape(SAMPLES, -1, 3)
     out["time"] = np.array(sim.time)
-    out["pair_params"] = np.asarray(sim._pair_params).copy()  # diagnosis only
+    out["pair_params"] = np.asarray(sim.plan.pair_params).copy()  # diagnosis only
     sim.close()
     return out
 

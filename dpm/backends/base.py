@@ -39,6 +39,8 @@ STATUS_OVERFLOW = 1
 STATUS_NAN = 2
 STATUS_OVERLAP = 3
 STATUS_WALL_OVERFLOW = 4
+#: an implicit integrator could not take the next step (its ``failure`` says why)
+STATUS_INTEGRATOR = 5
 
 
 @dataclass

@@ -21,7 +21,10 @@ class Integrator:
 
     An implicit integrator sets ``implicit = True`` and overrides :meth:`advance`, which
     then replaces the explicit kernel loop: it advances the simulation's state arrays
-    ``n`` steps itself.
+    ``n`` steps itself. It reads the scene's tables from ``sim.plan`` and keeps its
+    per-body state in ``sim.backend.aux``; when it cannot go on it returns the steps it
+    did with ``sim.backend.diag[0]`` set to ``STATUS_INTEGRATOR`` (5) and the reason in
+    :attr:`failure`, and the run loop stops with that diagnosis.
     """
 
     name: ClassVar[str] = ""
@@ -32,14 +35,16 @@ class Integrator:
     #: unstable near 2/omega; an unconditionally stable implicit scheme may lower it)
     min_steps_per_contact: ClassVar[float] = 5.0
     implicit: ClassVar[bool] = False
+    #: why the last :meth:`advance` stopped early (implicit integrators)
+    failure: str = ""
 
     def start(self, sim: Any) -> None:
         """Called once before the first step, after the initial forces are computed
-        (``sim.bodies.force``/``torque`` hold them) and ``sim._aux`` is allocated."""
+        (``sim.bodies.force``/``torque`` hold them) and ``sim.backend.aux`` is allocated."""
 
     def advance(self, sim: Any, n: int) -> int:
         """Implicit integrators only: advance ``n`` steps of ``sim``; return the number
-        of steps done (fewer only when the run must stop, with ``sim._diag[0]`` set)."""
+        of steps done (fewer only when the run must stop, with ``sim.backend.diag[0]`` set)."""
         raise NotImplementedError(f"{type(self).__name__} is explicit: the step kernels "
                                   "advance it")
 

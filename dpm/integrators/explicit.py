@@ -37,8 +37,8 @@ class PositionVerlet(Integrator):
         """d_0 = x_0 - x_{-1} = dt v_0 - dt^2/2 F_0/m (Taylor backwards)."""
         b = sim.bodies
         a = b.force * b.invmass[:, None]
-        sim._aux[:, 0:3] = sim.dt * b.velocity - 0.5 * sim.dt**2 * a
-        sim._aux[:, 3:6] = b.velocity
+        sim.backend.aux[:, 0:3] = sim.dt * b.velocity - 0.5 * sim.dt**2 * a
+        sim.backend.aux[:, 3:6] = b.velocity
 
 
 class Gear4(Integrator):
@@ -55,8 +55,8 @@ class Gear4(Integrator):
 
     def start(self, sim: Any) -> None:
         """Higher derivatives start at zero; a^p at the current acceleration."""
-        sim._aux[:] = 0.0
-        sim._aux[:, 0:3] = sim.bodies.force * sim.bodies.invmass[:, None]
+        sim.backend.aux[:] = 0.0
+        sim.backend.aux[:, 0:3] = sim.bodies.force * sim.bodies.invmass[:, None]
 
 
 class Gear5(Gear4):

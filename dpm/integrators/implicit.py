@@ -94,7 +94,7 @@ class ImplicitIntegrator(Integrator):
             p, nv = bd.planes()
             pts.append(np.asarray(p, float))
             nrm.append(np.asarray(nv, float))
-            mats += [sim._material_index(bd.material, "")] * len(p)
+            mats += [sim.material_index(bd.material)] * len(p)
             owners += [k] * len(p)
         # the planes of every boundary, packed for the kernels (object form: bd.planes())
         self._w_point = np.ascontiguousarray(np.concatenate(pts))
@@ -177,7 +177,7 @@ class ImplicitIntegrator(Integrator):
         t = np.zeros_like(x)
         wf = np.zeros((len(self._w_point), 3))
         self._K.contact_forces(x, v, w, sim.dt, self._radius, b.mass, b.material,
-                               sim._pair_model, sim._pair_params, self._w_point,
+                               sim.plan.pair_model, sim.plan.pair_params, self._w_point,
                                self._w_normal, self._w_mat, self._pi, self._pj,
                                int(self._np[0]), self._phist, self._wi, self._ww,
                                int(self._nw[0]), self._whist, f, t, wf)
@@ -196,7 +196,7 @@ class ImplicitIntegrator(Integrator):
         b.torque[:] = t
         self._w_force[:] = wf
         self._store_loads(sim)
-        sim._aux[:] = 0.0
+        sim.backend.aux[:] = 0.0
         self._start_history(sim)
 
     def _store_loads(self, sim: Any) -> None:
@@ -215,7 +215,7 @@ class ImplicitIntegrator(Integrator):
     def advance(self, sim: Any, n: int) -> int:
         if not self._ready:
             self.start(sim)
-        b, d = sim.bodies, sim._diag
+        b, d = sim.bodies, sim.backend.diag
         tol = self.tolerance * self._rmin
         log = np.zeros(n, np.int64)
         stats = np.zeros(5)
@@ -228,8 +228,9 @@ class ImplicitIntegrator(Integrator):
                 self.stall_tolerance * self._rmin, self.max_iterations,
                 self.gs_tolerance * tol, self.gs_max_sweeps, sim.max_overlap, self.theta,
                 b.position, b.velocity, b.orientation, b.angular_velocity, b.force, b.torque,
-                sim._aux, self._radius, b.mass, self._inertia, b.material, sim._pair_model,
-                sim._pair_params, self._w_point, self._w_normal, self._w_mat, self._w_force,
+                sim.backend.aux, self._radius, b.mass, self._inertia, b.material,
+                sim.plan.pair_model, sim.plan.pair_params, self._w_point, self._w_normal,
+                self._w_mat, self._w_force,
                 self._pi, self._pj, self._np, self._pkey, self._phist, self._wi, self._ww,
                 self._nw, self._wkey, self._whist, self._xref, self._margin, self._work,
                 np.zeros(1, np.int64), log[done:], stats, d)
@@ -248,14 +249,10 @@ class ImplicitIntegrator(Integrator):
         self.max_iterations_used = self.stats["max_iterations"]
         if done:
             self.last_iterations = int(log[done - 1])
-        if d[0] == K.STATUS_NOT_CONVERGED:
-            d[0] = K.STATUS_OK
-            sim.step_count += done
-            sim.time = sim.step_count * sim.dt
-            sim._update_boundary_loads()
-            sim._fail(f"{self.name}: Newton-Raphson did not converge within "
-                      f"{self.max_iterations} iterations in the next step (largest correction "
-                      f"{stats[2]:.3g} m, tolerance {tol:.3g} m)")
+        if d[0] == K.STATUS_NOT_CONVERGED:  # the run loop stops with this diagnosis
+            self.failure = (f"{self.name}: Newton-Raphson did not converge within "
+                            f"{self.max_iterations} iterations in the next step (largest "
+                            f"correction {stats[2]:.3g} m, tolerance {tol:.3g} m)")
         d[1] = done
         return done
 
@@ -323,6 +320,6 @@ class Numerov(ImplicitIntegrator):
             k4x, k4v = v + h * k3v, acc(x + h * k3x, v + h * k3v)
             x = x + h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x)
             v = v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
-        sim._aux[:, 0:3] = x
-        sim._aux[:, 3:6] = acc(x, v)
+        sim.backend.aux[:, 0:3] = x
+        sim.backend.aux[:, 3:6] = acc(x, v)
 
