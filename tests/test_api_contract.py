@@ -43,12 +43,28 @@ def test_contract_example_runs():
     assert b.orientation.shape == (3, 4) and b.mass.shape == (3,)
 
 
+def test_engine_seam_names():
+    """The backend seam and the state-order names that scripts and backends call."""
+    from dpm.backends import Backend, CpuBackend, StepResult, step_by_parts  # noqa: F401
+
+    assert "device" in inspect.signature(dpm.Simulation).parameters
+    for name in ("permute", "contact_count", "material_index", "kinetic_energy"):
+        assert callable(getattr(dpm.Simulation, name)), name
+    for name in ("pre_force", "needs_rebuild", "rebuild", "forces", "post_force", "advance",
+                 "max_speed", "max_overlap", "nan_count", "boundary_loads", "contact_count",
+                 "to_host", "from_host"):
+        assert callable(getattr(CpuBackend, name)), name
+    sim = dpm.Simulation(dt=1e-5, device=CpuBackend(force_pass="two_pass"))
+    assert isinstance(sim.backend, Backend) and sim.plan is None and sim.shape_names == []
+
+
 def test_registered_names_of_this_version():
     reg = dpm.registry()
     assert {"sphere"} <= set(reg.names("shape"))
     assert {"plane", "box"} <= set(reg.names("boundary"))
     assert {"linear_spring_dashpot", "hertz_mindlin"} <= set(reg.names("impact_model"))
     assert {"symplectic_euler", "velocity_verlet"} <= set(reg.names("integrator"))
+    assert {"cpu"} <= set(reg.names("backend"))
 
 
 def test_kernels_layer_imports_only_numpy_numba_math():
