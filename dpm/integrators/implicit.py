@@ -46,7 +46,7 @@ class ImplicitIntegrator(Integrator):
     """
 
     implicit: ClassVar[bool] = True
-    #: only used to compile the force evaluation of the first state (``_prime_forces``)
+    #: only used to compile the force evaluation of the first state (the backend's ``prime``)
     kernel_module = "dpm.kernels.integrate_velocity_verlet"
     #: unconditionally stable for linear contacts: one step per contact is accepted
     min_steps_per_contact = 1.0
