@@ -332,6 +332,10 @@ class Simulation:
         if self.integrator.implicit and self._prepared:
             raise ParameterError(f"sim.permute(): the {self.integrator.name} integrator keeps "
                                  "its own contact state; permute before the first run")
+        g = self.bodies.ghosts
+        if g and not np.array_equal(np.sort(order[n - g:]), np.arange(n - g, n)):
+            raise ParameterError(f"sim.permute(): the last {g} rows are ghost bodies and "
+                                 "must stay in the last rows")
         order = order.astype(np.int64)
         flips = None
         if self._prepared:  # which history floats of each pair change sign if it swaps

@@ -56,6 +56,12 @@ class Bodies:
         self.shape = np.zeros(0, np.int64)
         self.birth = np.zeros(0)
         self.element_start = np.zeros(1, np.int64)
+        #: the last ``ghosts`` rows are ghost bodies: copies of bodies that another
+        #: process owns (its halo), set by the backend each step; they are not integrated,
+        #: their elements take part in the contacts, and their force and torque rows hold
+        #: what they received here, for the backend to hand back to the owners. 0 on one
+        #: process.
+        self.ghosts = 0
 
     def __len__(self) -> int:
         return len(self.id)

@@ -160,7 +160,8 @@ class CpuBackend:
         ctl = SceneConstants(sim.gravity, float(sim.skin), sim.max_overlap,
                              not plan.spheres_only, self.fused_chunks(),
                              plan.spheres_only and not sim.sphere_orientation,
-                             plan.pair_model, plan.pair_params, sim.period)
+                             plan.pair_model, plan.pair_params, sim.period,
+                             len(b) - b.ghosts)
         bodies = BodyArrays(b.position, b.velocity, b.orientation, b.angular_velocity,
                             b.force, b.torque, b.mass, b.invmass, b.invinertia, self.vf,
                             self.wf, self.aux, b.element_start)
@@ -216,8 +217,8 @@ class CpuBackend:
                                    self.diag)
 
     def post_force(self, dt: float) -> None:
-        _, bodies, *_ = self.records()
-        self.module.post_force(dt, bodies)
+        ctl, bodies, *_ = self.records()
+        self.module.post_force(dt, ctl, bodies)
 
     def prime(self) -> None:
         """Forces of the current state without advancing contact history (dt = 0)."""

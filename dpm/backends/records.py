@@ -49,7 +49,11 @@ BoundaryArrays = namedtuple("BoundaryArrays", ["kind", "par", "owner", "material
 #: whether element positions are computed from their bodies (False: every body one sphere),
 #: the number of chunks of the fused force pass (0: two passes), whether single spheres
 #: skip their quaternion update, the material-pair tables, the periodic box (lower corner
-#: [0:3], period [3:6], 0 = not periodic)
+#: [0:3], period [3:6], 0 = not periodic); ``n_owned``: bodies [0, n_owned) are owned
+#: and integrated, the rest are ghosts (copies of bodies owned elsewhere: their elements
+#: take part in the contacts, their force and torque sums are what they receive here, to
+#: be handed back to their owners; :attr:`dpm.state.Bodies.ghosts`)
 SceneConstants = namedtuple("SceneConstants", ["gravity", "skin", "max_overlap",
                                                "update_elements", "fused", "spin_only",
-                                               "pair_model", "pair_params", "period"])
+                                               "pair_model", "pair_params", "period",
+                                               "n_owned"])

@@ -177,15 +177,17 @@ def pre_force(dt, ctl, bodies, elems):
     update_elements = ctl.update_elements
     spin_only = ctl.spin_only
     period = ctl.period
+    n_owned = ctl.n_owned
     for b in prange(b_pos.shape[0]):
-        if spin_only:
-            pre_force_sphere(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
-                             b_invinertia, dt, b_vf, b_wf, b_aux)
-        else:
-            pre_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
-                           b_invinertia, dt, b_vf, b_wf, b_aux)
-        if PERIODIC:  # (a constant of the scene)
-            wrap_body(b, period, b_pos, b_estart, e_ref)
+        if b < n_owned:  # (ghosts: state and predicted velocities come from their owner)
+            if spin_only:
+                pre_force_sphere(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
+                                 b_invmass, b_invinertia, dt, b_vf, b_wf, b_aux)
+            else:
+                pre_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
+                               b_invmass, b_invinertia, dt, b_vf, b_wf, b_aux)
+            if PERIODIC:  # (a constant of the scene)
+                wrap_body(b, period, b_pos, b_estart, e_ref)
         if update_elements:
             place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos)
         for e in range(b_estart[b], b_estart[b + 1]):
@@ -196,7 +198,7 @@ def pre_force(dt, ctl, bodies, elems):
 
 
 @pjit
-def post_force(dt, bodies):
+def post_force(dt, ctl, bodies):
     """Step 5 alone, per body: the integrator's post-force part (e.g. the second half
     kick). :func:`compute_forces` with ``integrate`` runs it fused into its last per-body
     loop; this separate form is for backends that must act between the forces and the
@@ -205,7 +207,7 @@ def post_force(dt, bodies):
     b_force, b_torque, b_invmass, b_invinertia = (bodies.force, bodies.torque, bodies.invmass,
                                                   bodies.invinertia)
     b_aux = bodies.aux
-    for b in prange(b_pos.shape[0]):
+    for b in prange(ctl.n_owned):
         post_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
                         b_invinertia, dt, b_aux)
 
@@ -593,6 +595,7 @@ def fused_pass(dt, integrate, ctl, bodies, elems, pairs, walls, bnd):
     w_kind, w_par, w_owner, w_mat, w_ids, f_cur = (bnd.kind, bnd.par, bnd.owner, bnd.material,
                                                    bnd.ids, bnd.frame)
     nchunks = ctl.fused
+    n_owned = ctl.n_owned
     gravity = ctl.gravity
     g0 = gravity[0]
     g1 = gravity[1]
@@ -678,7 +681,7 @@ def fused_pass(dt, integrate, ctl, bodies, elems, pairs, walls, bnd):
                         b_torque[j, 0] += nl_f[kk, 6]
                         b_torque[j, 1] += nl_f[kk, 7]
                         b_torque[j, 2] += nl_f[kk, 8]
-            if integrate:
+            if integrate and j < n_owned:
                 post_force_body(j, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
                                 b_invmass, b_invinertia, dt, b_aux)
 
@@ -695,6 +698,7 @@ def sum_pass(dt, integrate, ctl, bodies, elems, pairs, walls):
     wl_start, wl_f = walls.start, walls.force
     e_count = elems.count
     gravity = ctl.gravity
+    n_owned = ctl.n_owned
     for b in prange(b_force.shape[0]):
         m = b_mass[b]
         fx = m * gravity[0]
@@ -730,7 +734,7 @@ def sum_pass(dt, integrate, ctl, bodies, elems, pairs, walls):
         b_torque[b, 0] = tx
         b_torque[b, 1] = ty
         b_torque[b, 2] = tz
-        if integrate:
+        if integrate and b < n_owned:
             post_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque, b_invmass,
                             b_invinertia, dt, b_aux)
 
