@@ -197,12 +197,6 @@ class ImpactModel:
         return row
 
 
-def hertz_contact_time(meff: float, reff: float, estar: float, speed: float) -> float:
-    """Elastic Hertz contact duration t = 2.868 (m*^2 / (R* E*^2 v))^(1/5) (Johnson 1985)."""
-    speed = max(speed, 1e-12)
-    return 2.868265699194 * (meff**2 / (reff * estar**2 * speed)) ** 0.2
-
-
 def hertz_equivalent_stiffness(meff: float, reff: float, estar: float, speed: float) -> float:
     """Maw's linear stiffness that stores the strain energy of a Hertz contact at ``speed``:
     k = 16/15 sqrt(R*) E* (15 m* v^2 / (16 sqrt(R*) E*))^(1/5) (DPM thesis eq. 2.29)."""
