@@ -118,13 +118,7 @@ class HertzBrilliantov(ImpactModel):
     needs_elastic_constants = True
     parameters = {
         **{k: v for k, v in COMMON.items() if k != "restitution"},
-        "dissipation": Parameter(default=None, low=0.0, unit="s",
-                                 doc="viscoelastic constant A"),
-        "restitution": Parameter(default=None, low=0.0, high=1.0, low_open=True,
-                                 doc="restitution at reference_speed (instead of A)"),
-        "reference_speed": Parameter(default=None, low=0.0, low_open=True, unit="m/s",
-                                     doc="impact speed of the given restitution (default: "
-                                         "the scene's)"),
+        **BrilliantovNormal.parameters,  # dissipation, restitution, reference_speed
         "tangential_damping_ratio": Parameter(default=0.0, low=0.0,
                                               doc="zeta_t of the tangential dashpot"),
     }
