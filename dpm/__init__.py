@@ -18,6 +18,7 @@ if "NUMBA_THREADING_LAYER" not in _os.environ:
 
 from ._memory import tune_malloc as _tune_malloc
 from .boundaries import Boundary
+from .checkpoint import restart
 from .errors import DpmError, ParameterError, SceneError, UnknownNameError, UnstableRunError
 from .flow import Inlet, Outlet
 from .hookspecs import hookimpl
@@ -45,7 +46,7 @@ _tune_malloc()  # large arrays mapped on their own, freed back at once (dpm/_mem
 __all__ = [
     "Boundary", "BoxRegion", "Compose", "CylinderRegion", "DpmError", "hookimpl",
     "ImpactModel", "Inlet", "Integrator", "lattice", "load", "Material", "Motion",
-    "Oscillation", "Outlet", "ParameterError", "Region", "register", "registry", "Rotation",
-    "SceneError", "Shape", "Simulation", "Translation", "TriangularOscillation", "Tumbling",
-    "UnknownNameError", "UnstableRunError", "__version__",
+    "Oscillation", "Outlet", "ParameterError", "Region", "register", "registry", "restart",
+    "Rotation", "SceneError", "Shape", "Simulation", "Translation", "TriangularOscillation",
+    "Tumbling", "UnknownNameError", "UnstableRunError", "__version__",
 ]

@@ -79,3 +79,17 @@ def dpm_on_particles_inserted(sim: Simulation, inlet: Any, ids: Any) -> None:
 def dpm_on_particles_removed(sim: Simulation, outlet: Any, records: Any) -> None:
     """An outlet has just removed bodies; ``records`` is a dict of arrays: id, time, mass,
     residence_time, position (n, 3), velocity (n, 3)."""
+
+
+@hookspec
+def dpm_on_checkpoint(sim: Simulation, state: dict) -> None:
+    """A checkpoint is being written: put what the plugin must have back after a restart
+    into ``state`` under a key of its own (picklable values: numpy arrays, numbers,
+    strings, lists, dicts). State kept on the scene's own objects (a boundary, a motion,
+    an impact model) is in the checkpoint already."""
+
+
+@hookspec
+def dpm_on_restart(sim: Simulation, state: dict) -> None:
+    """A simulation was restored from a checkpoint (:func:`dpm.restart`); ``state`` is the
+    dict that :func:`dpm_on_checkpoint` filled when it was written."""

@@ -43,6 +43,7 @@ def append_bodies(sim: Any, shape: Shape, imat: int, density: float, pos: np.nda
     batch = shape.build(n, density)
     quat = quat_multiply(quat, np.asarray(batch.principal_rotation, float))
     first = len(sim.bodies)
+    snapshot_forces(sim)
     ids = np.arange(sim._next_id, sim._next_id + n, dtype=np.int64)
     sim._next_id += n
     kind = getattr(shape, "name", "") or type(shape).__name__
@@ -60,6 +61,9 @@ def append_bodies(sim: Any, shape: Shape, imat: int, density: float, pos: np.nda
     owner = np.repeat(np.arange(first, first + n), batch.element_count)
     sim.elements.append(owner, batch.element_offset, batch.element_radius,
                         filled(len(owner), imat, np.int64))
+    # the lists keep one (empty) row per new element: every contact keeps its history
+    sim.contacts.resize_rows(len(sim.elements))
+    sim.wall_contacts.resize_rows(len(sim.elements))
     sim._prepared = False
     sim._forces_valid = False
     return ids.copy()
@@ -79,13 +83,75 @@ def remove_bodies(sim: Any, ids) -> dict[str, np.ndarray]:
     keep_e = keep_b[e.owner]
     new_b = np.cumsum(keep_b) - 1
     new_e = np.cumsum(keep_e) - 1
-    if sim._prepared:
-        sim.backend.keep_bodies(keep_b, keep_e, new_e)
+    snapshot_forces(sim)
+    if sim._force_snapshot is not None:  # the bodies the removed ones touched
+        partners = touching(sim, gone)
+        sim._force_snapshot["touched"].append(b.id[partners])
+    if len(sim.contacts.start) == len(e) + 1:  # the lists exist: drop the removed rows
+        sim.contacts.keep_rows(keep_e, new_e, True)
+        sim.wall_contacts.keep_rows(keep_e, new_e, False)
+    if sim.backend.sim is sim:
+        sim.backend.keep_bodies(keep_b)
     b.keep(keep_b)
     e.keep(keep_e, new_b)
+    sim._checked_elements = int(np.sum(keep_e[:sim._checked_elements]))
     if sim._prepared:
         population_changed(sim)
+    else:
+        sim._forces_valid = False
     return rec
+
+
+def touching(sim: Any, mask: np.ndarray, geometry: bool = False) -> np.ndarray:
+    """Bodies (bool per row) with a touching contact to a body of ``mask``: by the
+    contacts' touching flags of the last step, or (``geometry``) by the overlaps of the
+    listed pairs now."""
+    c, e = sim.contacts, sim.elements
+    out = np.zeros(len(sim.bodies), bool)
+    if len(c.start) != len(e) + 1 or c.count == 0:
+        return out
+    rows = np.repeat(np.arange(len(e)), np.diff(c.start))
+    act = (sim.backend.pair_overlaps() > 0.0) if geometry else (c.active[:c.count] != 0)
+    bi, bj = e.owner[rows[act]], e.owner[c.key[:c.count][act]]
+    out[bi[mask[bj]]] = True
+    out[bj[mask[bi]]] = True
+    return out & ~mask
+
+
+def snapshot_forces(sim: Any) -> None:
+    """Before the first change of the population since the forces were last evaluated:
+    keep every body's force and torque by id, so that the bodies the change does not touch
+    go on with them (:func:`restore_forces`) and their trajectories stay as they would
+    have been."""
+    if sim._forces_valid and sim._force_snapshot is None:
+        b = sim.bodies
+        order = np.argsort(b.id, kind="stable")
+        sim._force_snapshot = {"id": b.id[order].copy(), "force": b.force[order].copy(),
+                               "torque": b.torque[order].copy(), "touched": []}
+
+
+def restore_forces(sim: Any) -> None:
+    """After the forces of a changed population were evaluated (dt = 0): the bodies that
+    were there before and touch no added or removed body take back their forces of the
+    last step (a fresh evaluation differs from it by the velocities that dashpots see:
+    the integrator's predicted ones during a step, the current ones at dt = 0). Added
+    bodies start the integrator's state (:meth:`Integrator.start_bodies`)."""
+    snap = sim._force_snapshot
+    sim._force_snapshot = None
+    b = sim.bodies
+    if snap is not None and len(b):
+        pos = np.searchsorted(snap["id"], b.id)
+        pos = np.minimum(pos, max(len(snap["id"]) - 1, 0))
+        old = (snap["id"][pos] == b.id) if len(snap["id"]) else np.zeros(len(b), bool)
+        keep = old & ~touching(sim, ~old, geometry=True)
+        if snap["touched"]:
+            keep &= ~np.isin(b.id, np.concatenate(snap["touched"]))
+        b.force[keep] = snap["force"][pos[keep]]
+        b.torque[keep] = snap["torque"][pos[keep]]
+    new = np.flatnonzero(b.id >= sim._integrated_ids)
+    if len(new):
+        sim.integrator.start_bodies(sim, new)
+    sim._integrated_ids = sim._next_id
 
 
 def spheres_only(sim: Any) -> bool:
@@ -114,6 +180,7 @@ def population_changed(sim: Any) -> None:
     if sim.plan.spheres_only:
         share_sphere_arrays(sim)
     sim.backend.population_changed()
+    restore_forces(sim)
     sim._forces_valid = True
     sim._update_boundary_loads()
     sim._prepared = True

@@ -4,9 +4,11 @@ and the event schedule; the steps themselves run in the backend (:mod:`dpm.backe
 from __future__ import annotations
 
 import math
+import os
 import time as _time
 import warnings
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numba
@@ -136,12 +138,18 @@ class Simulation:
             device.threads = int(threads)
         #: the backend the steps run on (:mod:`dpm.backends`)
         self.backend: Backend = device
-        self.dt = float("nan") if self._auto_dt else float(v["dt"])
-        self.gravity = np.asarray(v["gravity"], float)
-        self.skin = v["skin"]
-        self.dt_check = v["dt_check"]
-        self.max_overlap = float(v["max_overlap"])
-        self.overlap_tolerance = float(v["overlap_tolerance"])
+        # time is t0 + (step_count - step0) dt: (t0, step0) move when dt changes, so that
+        # time stays the sum of the steps taken (and is step_count * dt, bit for bit, while
+        # dt has never changed)
+        self._t0 = 0.0
+        self._step0 = 0
+        self._dt = float("nan") if self._auto_dt else float(v["dt"])
+        self._dt_checked = False
+        self._gravity = np.asarray(v["gravity"], float)
+        self._skin = v["skin"]
+        self._dt_check = v["dt_check"]
+        self._max_overlap = float(v["max_overlap"])
+        self._overlap_tolerance = float(v["overlap_tolerance"])
         self.materials: list[Material] = []
         #: registered shape names; ``bodies.shape`` indexes this list
         self.shape_names: list[str] = []
@@ -159,8 +167,24 @@ class Simulation:
         #: what the kernels need of this scene (:class:`dpm.plan.ScenePlan`), made when
         #: the run starts
         self.plan: _plan.ScenePlan | None = None
-        self.time = 0.0
         self.step_count = 0
+        #: the material-pair tables of the laws, packed once and kept while neither the
+        #: laws nor the materials change (a particle added after a run must not recalibrate
+        #: the contacts of the others): (version, laws, pair_model, pair_params, width)
+        self._tables: tuple | None = None
+        self._contacts_version = 0
+        #: elements checked for initial overlaps (those added later are checked against
+        #: their neighbours only)
+        self._checked_elements = 0
+        self._next_output = 0
+        self._flow_every = 0
+        self._next_flow = 0
+        #: periodic checkpoints (:meth:`checkpoint_every`), None when off
+        self._checkpoints = None
+        #: forces by id of the bodies before the population changed (population.py)
+        self._force_snapshot: dict | None = None
+        #: bodies with ids below this have integrator state (started)
+        self._integrated_ids = 0
         self.rebuild_count = 0
         self._next_id = 0
         self._prepared = False
@@ -175,6 +199,113 @@ class Simulation:
         self._output_path: str | None = None
         self._output_every: int | None = None
         self._output_every_s: float | None = None
+
+    # ----------------------------------------------------------------- settable state
+    @property
+    def time(self) -> float:
+        """Simulated time [s]: the sum of the steps taken (read-only)."""
+        if self.step_count == self._step0:
+            return self._t0
+        return self._t0 + (self.step_count - self._step0) * self._dt
+
+    @time.setter
+    def time(self, value: Any) -> None:
+        raise ParameterError("sim.time is the sum of the steps taken and cannot be set; "
+                             "run(until=...) advances it")
+
+    @property
+    def dt(self) -> float:
+        """Time step [s]. May be changed between runs: the time-step check runs again
+        before the next step (``dt_check``), ``time`` stays the sum of the steps taken,
+        output and flow intervals given in seconds are kept in seconds, and the
+        integrator's state is rescaled (:meth:`dpm.integrators.base.Integrator.dt_changed`)."""
+        return self._dt
+
+    @dt.setter
+    def dt(self, value: Any) -> None:
+        if isinstance(value, str) and value == "auto":
+            if self.step_count:
+                raise ParameterError("sim.dt='auto' is chosen before the first step only; "
+                                     "give a number of seconds after a run")
+            self._auto_dt = True
+            self._dt = float("nan")
+            self._prepared = False
+            return
+        validate("sim.dt", {"dt": Parameter(low=0.0, low_open=True, unit="s")}, {"dt": value})
+        value = float(value)
+        if not math.isfinite(value):
+            raise ParameterError(f"sim.dt={value!r} must be a finite number of seconds > 0")
+        if value == self._dt:
+            return
+        old = self._dt
+        self._t0 = self.time
+        self._step0 = self.step_count
+        self._dt = value
+        self._auto_dt = False
+        self._dt_checked = False
+        if self._output_every_s is not None and self._writer is not None:
+            self._output_every = max(1, round(self._output_every_s / value))
+            self._next_output = self.step_count + self._output_every
+        if self._forces_valid and math.isfinite(old):
+            self.integrator.dt_changed(self, old)
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """Gravitational acceleration [m/s2] (a 3-vector; may be changed between runs)."""
+        return self._gravity
+
+    @gravity.setter
+    def gravity(self, value: Any) -> None:
+        v = validate("sim.gravity", {"gravity": self.parameters["gravity"]},
+                     {"gravity": value})
+        self._gravity = np.asarray(v["gravity"], float).copy()
+
+    @property
+    def skin(self) -> float | None:
+        """Verlet skin [m] (None: 0.2 x the smallest element diameter, set at the first
+        run). Changing it rebuilds the neighbour lists before the next step."""
+        return self._skin
+
+    @skin.setter
+    def skin(self, value: Any) -> None:
+        validate("sim.skin", {"skin": self.parameters["skin"]}, {"skin": value})
+        self._skin = None if value is None else float(value)
+        self._prepared = False
+
+    @property
+    def dt_check(self) -> str:
+        """What a too large time step does: "refuse", "warn" or "off"."""
+        return self._dt_check
+
+    @dt_check.setter
+    def dt_check(self, value: Any) -> None:
+        if value not in DT_CHECKS:
+            raise ParameterError(f"sim.dt_check={value!r}; allowed: {', '.join(DT_CHECKS)}")
+        self._dt_check = value
+        self._dt_checked = False
+
+    @property
+    def max_overlap(self) -> float:
+        """Largest overlap / radius tolerated during a run before it stops as unstable."""
+        return self._max_overlap
+
+    @max_overlap.setter
+    def max_overlap(self, value: Any) -> None:
+        validate("sim.max_overlap", {"max_overlap": self.parameters["max_overlap"]},
+                 {"max_overlap": value})
+        self._max_overlap = float(value)
+
+    @property
+    def overlap_tolerance(self) -> float:
+        """Largest initial overlap / radius accepted for particles when they are added."""
+        return self._overlap_tolerance
+
+    @overlap_tolerance.setter
+    def overlap_tolerance(self, value: Any) -> None:
+        validate("sim.overlap_tolerance",
+                 {"overlap_tolerance": self.parameters["overlap_tolerance"]},
+                 {"overlap_tolerance": value})
+        self._overlap_tolerance = float(value)
 
     @property
     def threads(self) -> int | None:
@@ -221,6 +352,7 @@ class Simulation:
                                      f"missing: {', '.join(missing)}")
         self._contacts[(ia, ib)] = law
         self._contacts[(ib, ia)] = law
+        self._contacts_version += 1
         self._prepared = False
         return law
 
@@ -233,6 +365,7 @@ class Simulation:
         self.boundaries.append(b)
         self._prepared = False
         self._forces_valid = False
+        self._force_snapshot = None
         return b
 
     def add_particles(self, shape: str | Shape, material: Material,
@@ -289,6 +422,7 @@ class Simulation:
         self.period[3 + d] = float(upper - lower)
         self._prepared = False
         self._forces_valid = False
+        self._force_snapshot = None
 
 
     def add_inlet(self, region: Region, material: Material, **params: Any) -> Inlet:
@@ -390,32 +524,50 @@ class Simulation:
         """Rayleigh step and shortest contact duration of the current scene."""
         return scene_report(self)
 
-    def _prepare(self) -> None:
-        """Validate the scene, plan it (tables, history layout, boundary kinds, step
-        module) and hand it to the backend."""
-        scene_check.validate_scene(self)
+    def _check_time_step(self) -> None:
+        """The time-step check (``dt_check``) of the scene as it is now; ``dt='auto'``
+        picks the step."""
         report = self.time_step_report()
-        if self._auto_dt and not self.dt > 0:
-            self.dt = report.auto()
-            report.dt = self.dt
+        if self._auto_dt and not self._dt > 0:
+            self._dt = report.auto()
+            report.dt = self._dt
         refuse, warn = report.problems()
         if self.dt_check == "refuse" and refuse:
             raise ParameterError("Simulation(): time step too large:\n  " + "\n  ".join(refuse)
                                  + "\n  (pass dt_check='warn' to run anyway)")
         if self.dt_check != "off":
             for w in (refuse + warn):
-                warnings.warn(w, stacklevel=3)
+                warnings.warn(w, stacklevel=4)
+        self._dt_checked = True
+        return report
+
+    def _pair_tables(self, report: TimeStepReport) -> tuple:
+        """The material-pair tables (:func:`dpm.impact.parts.pack_tables`): packed at the
+        first run and kept while neither a law nor the materials change, so that bodies
+        added later do not recalibrate the contacts of the others."""
+        key = (self._contacts_version, len(self.materials))
+        if self._tables is None or self._tables[0] != key:
+            self._tables = (key, *pack_tables(
+                self._contacts, self.materials,
+                lambda a, b: PairContext(report.impact_speed, *smallest_pair(self, a, b))))
+        return self._tables[1:]
+
+    def _prepare(self) -> None:
+        """Validate the scene, plan it (tables, history layout, boundary kinds, step
+        module) and hand it to the backend. After a run (bodies added, a law or the skin
+        changed) the contact lists keep every contact's history and only the bodies added
+        since are checked for initial overlaps."""
+        scene_check.validate_scene(self)
+        report = self._check_time_step()
         # material-pair tables: one law per distinct composition (dpm.impact.parts); the
         # history floats per contact: the widest the laws use
-        laws, pair_model, pair_params, width = pack_tables(
-            self._contacts, self.materials,
-            lambda a, b: PairContext(report.impact_speed, *smallest_pair(self, a, b)))
-        if self.skin is None:
-            self.skin = 0.4 * float(self.elements.radius.min())
+        laws, pair_model, pair_params, width = self._pair_tables(report)
+        if self._skin is None:
+            self._skin = 0.4 * float(self.elements.radius.min())
         # boundaries: pipe joints, primitives, frames, search grids
         join_pipe_ends(self.boundaries)
         self.walls = BoundaryTable(self.boundaries, lambda m: self._material_index(m, ""),
-                                   float(self.elements.radius.max()) + self.skin)
+                                   float(self.elements.radius.max()) + self._skin)
         spheres = population.spheres_only(self)
         if spheres:  # every body one sphere at its centre: element positions are the bodies'
             population.share_sphere_arrays(self)
@@ -428,7 +580,8 @@ class Simulation:
         self._set_frames()
         self.backend.attach(self)
         self.backend.rebuild()  # (it wraps periodic positions into the box first)
-        scene_check.check_initial_overlaps(self)
+        scene_check.check_initial_overlaps(self, first_element=self._checked_elements)
+        self._checked_elements = len(self.elements)
         self._prepared = True
 
     def _set_frames(self) -> None:
@@ -443,7 +596,7 @@ class Simulation:
         nb = len(self.boundaries)
         if not self.plan.moving:
             return np.zeros((0, nb, 18))
-        t = (step + 1 + np.arange(n)) * self.dt
+        t = self._t0 + (step - self._step0 + 1 + np.arange(n)) * self._dt
         table = np.empty((n, nb, 18))
         for k, bd in enumerate(self.boundaries):
             table[:, k] = frames(bd.motion, t)
@@ -485,6 +638,8 @@ class Simulation:
             if self.inlets and self.step_count == 0 and not self._forces_valid:
                 population.flow_event(self)  # an inlet may fill an empty scene
             self._prepare()
+        elif not self._dt_checked:  # dt (or dt_check) changed since the last run
+            self._check_time_step()
         if steps is not None:
             nsteps = int(steps)
         else:
@@ -501,9 +656,14 @@ class Simulation:
         self.backend.sync_form()
         if not self._forces_valid:
             self.backend.prime()
+            if self._integrated_ids == 0:  # the first run: the integrator starts
+                self._force_snapshot = None
+                self.integrator.start(self)
+                self._integrated_ids = self._next_id
+            else:  # after a run: bodies added since start, the others go on
+                population.restore_forces(self)
             self._forces_valid = True
             self._update_boundary_loads()
-            self.integrator.start(self)
         from .progress import Progress
 
         hooks = self._registry.manager.hook
@@ -517,9 +677,9 @@ class Simulation:
                 self._output_every = max(1, round(self._output_every_s / self.dt))
             self._writer = Writer(self._output_path, self)
             self.last_output = self._writer
+            self._next_output = (self.step_count // self._output_every + 1) * self._output_every
             self._write_frame()
-        flows = self.inlets + self.outlets
-        flow_every = (max(1, round(min(f.every for f in flows) / self.dt)) if flows else 0)
+        self._schedule_flows()
         done = 0
         chunk = 10
         try:
@@ -527,10 +687,8 @@ class Simulation:
                 n = min(nsteps - done, chunk)
                 if per_step_hooks:
                     n = 1
-                if self._writer is not None:
-                    n = min(n, self._output_every - self.step_count % self._output_every)
-                if flow_every:
-                    n = min(n, flow_every - self.step_count % flow_every)
+                for due in self._due_steps():
+                    n = min(n, due - self.step_count)
                 if per_step_hooks:
                     hooks.dpm_before_step(sim=self)
                 t0 = _time.perf_counter()
@@ -539,10 +697,15 @@ class Simulation:
                 done += ran
                 if per_step_hooks:
                     hooks.dpm_after_step(sim=self)
-                if flow_every and self.step_count % flow_every == 0:
+                if self._flow_every and self.step_count >= self._next_flow:
+                    self._next_flow += self._flow_every
                     population.flow_event(self)
-                if self._writer is not None and self.step_count % self._output_every == 0:
+                if self._writer is not None and self.step_count >= self._next_output:
+                    self._next_output += self._output_every
                     self._write_frame()
+                if self._checkpoints is not None and \
+                        self.step_count >= self._checkpoints.next_step:
+                    self._checkpoints.write(self)
                 bar.update(ran, self.time)
                 # aim at ~0.1 s of work per call (Python runs only at these events), and
                 # at least 100x the checks after each call: at 1e6 spheres a step takes
@@ -556,6 +719,28 @@ class Simulation:
             if self._writer is not None:
                 self._writer.flush()
 
+
+    def _schedule_flows(self) -> None:
+        """The step of the next flow event (outlets, inlets): every ``min(every)`` of
+        them, counted from the last change of dt."""
+        flows = self.inlets + self.outlets
+        fe = max(1, round(min(f.every for f in flows) / self.dt)) if flows else 0
+        if fe != self._flow_every:
+            self._flow_every = fe
+            if fe:
+                s0 = self._step0
+                self._next_flow = s0 + ((self.step_count - s0) // fe + 1) * fe
+
+    def _due_steps(self) -> list[int]:
+        """Steps at which an event is due: a kernel call ends there."""
+        due = []
+        if self._writer is not None:
+            due.append(self._next_output)
+        if self._flow_every:
+            due.append(self._next_flow)
+        if self._checkpoints is not None:
+            due.append(self._checkpoints.next_step)
+        return due
 
     def _advance(self, n: int) -> int:
         """Run ``n`` steps in as few backend calls as possible; diagnose a failure."""
@@ -579,7 +764,6 @@ class Simulation:
             if res.status != STATUS_OK:
                 break
         self.step_count += total
-        self.time = self.step_count * self.dt
         self._update_boundary_loads()
         if res.status == STATUS_NAN:
             self._fail("a position became NaN")
@@ -614,6 +798,78 @@ class Simulation:
         self._writer.write(self)
         self._registry.manager.hook.dpm_on_output(sim=self, frame=self._writer.frames - 1,
                                                   path=self._writer.path)
+
+    # ----------------------------------------------------------------- checkpoints
+    def checkpoint(self, path: str | os.PathLike) -> Path:
+        """Write a checkpoint of the whole simulation now (:mod:`dpm.checkpoint`):
+        :func:`dpm.restart` continues from it bit for bit. Written atomically (a
+        temporary file beside ``path``, fsync, rename). Returns the path."""
+        from . import checkpoint as _ckpt
+
+        if isinstance(path, bool) or not isinstance(path, str | os.PathLike) or not str(path):
+            raise ParameterError(f"sim.checkpoint(): path={path!r} must be a file name")
+        return _ckpt.write(self, path)
+
+    def checkpoint_every(self, path: str | os.PathLike, every: float | None = None,
+                         every_steps: int | None = None, keep: int = 2) -> None:
+        """Write checkpoints during the runs every ``every`` seconds of simulated time
+        (or ``every_steps`` steps) to numbered files beside ``path`` (``run.ckpt.h5`` ->
+        ``run.ckpt.0000012000.h5``, the step number), keeping the last ``keep``.
+        ``dpm.restart(path)`` takes the newest. ``path=None`` stops them."""
+        from . import checkpoint as _ckpt
+
+        if path is None:
+            self._checkpoints = None
+            return
+        if isinstance(path, bool) or not isinstance(path, str | os.PathLike) or not str(path):
+            raise ParameterError(f"sim.checkpoint_every(): path={path!r} must be a file name")
+        if (every is None) == (every_steps is None):
+            raise ParameterError("sim.checkpoint_every(): give exactly one of every (s) or "
+                                 "every_steps")
+        spec = {"every": Parameter(default=None, low=0.0, low_open=True, unit="s"),
+                "every_steps": Parameter(default=None, low=1, kind="float"),
+                "keep": Parameter(default=2, low=1, kind="float")}
+        validate("sim.checkpoint_every()", spec,
+                 {"every": every, "every_steps": every_steps, "keep": keep})
+        for name, value in (("every_steps", every_steps), ("keep", keep)):
+            if value is not None and (isinstance(value, bool) or int(value) != value):
+                raise ParameterError(f"sim.checkpoint_every(): {name}={value!r} must be an "
+                                     "integer")
+        base = Path(path)
+        if base.is_dir():
+            raise ParameterError(f"sim.checkpoint_every(): path={str(path)!r} is a directory")
+        self._checkpoints = _ckpt.Schedule(base, None if every is None else float(every),
+                                           None if every_steps is None else int(every_steps),
+                                           int(keep), self.step_count,
+                                           self.dt if self.dt > 0 else 1.0)
+
+    def __getstate__(self) -> dict[str, Any]:
+        """What a checkpoint stores: everything but the plugin registry (found again),
+        the open output file (its path and frame count instead) and the progress of a
+        run in flight."""
+        state = self.__dict__.copy()
+        w = state.get("_writer")
+        state["_writer"] = None
+        state["last_output"] = None
+        state["_writer_state"] = None if w is None else {
+            "path": str(w.path), "frames": int(w.frames), "removed": int(w.removed)}
+        state["_registry"] = None
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._registry = registry()
+
+    def _restored(self, path: Path) -> None:
+        """After unpickling from the checkpoint at ``path``: reopen the output, plugins."""
+        from .checkpoint import resume_output
+
+        ws = self.__dict__.pop("_writer_state", None)
+        resume_output(self, ws)
+        if self._checkpoints is not None and self._checkpoints.next_step <= self.step_count:
+            self._checkpoints.next_step = self.step_count + self._checkpoints.interval(self.dt)
+        self._registry.manager.hook.dpm_on_restart(
+            sim=self, state=self.__dict__.pop("_plugin_state", {}) or {})
 
     # ----------------------------------------------------------------- measures
     def kinetic_energy(self) -> float:

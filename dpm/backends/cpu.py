@@ -95,6 +95,13 @@ class CpuBackend:
         self.aux = np.zeros((0, 0))
         self._rows_stale = False
 
+    def __getstate__(self) -> dict[str, Any]:
+        """A checkpoint keeps the state (the integrator's rows, diagnostics); the step
+        module is loaded again at the next run."""
+        state = self.__dict__.copy()
+        state["module"] = None
+        return state
+
     # ------------------------------------------------------------------ set-up
     def thread_count(self, n_elements: int) -> int:
         """Threads for a run of a scene of ``n_elements`` elements."""
@@ -113,11 +120,18 @@ class CpuBackend:
         c, wc = sim.contacts, sim.wall_contacts
         c.set_history_width(plan.history_width)
         wc.set_history_width(plan.history_width)
-        if len(c.start) != n_el + 1:
+        if len(c.start) != n_el + 1 or (c.count == 0 and wc.count == 0):
             c.reset(n_el, 4 * n_el)  # grows on demand
             wc.reset(n_el, n_el // 4 + 16)
+        # (re-attached after a run: the lists, their history and the integrator's rows of
+        # the bodies already there are kept; rows of bodies added since start at zero)
         self._scratch()
-        self.aux = np.zeros((len(b), sim.integrator.aux_columns))
+        cols = sim.integrator.aux_columns
+        if self.aux.shape[1:] == (cols,) and len(self.aux) <= len(b):
+            self.aux = np.ascontiguousarray(np.concatenate(
+                [self.aux, np.zeros((len(b) - len(self.aux), cols))]))
+        else:
+            self.aux = np.zeros((len(b), cols))
         if not plan.spheres_only:
             self.update_elements()
 
@@ -221,11 +235,24 @@ class CpuBackend:
         self.module.post_force(dt, ctl, bodies)
 
     def prime(self) -> None:
-        """Forces of the current state without advancing contact history (dt = 0)."""
-        b = self.sim.bodies
+        """Forces of the current state, leaving the contact history and the touching
+        flags as they were (dt = 0: the contact pass would otherwise re-project tangential
+        springs and mark contacts as begun, so that the steps after a prime differ from
+        those of an uninterrupted run)."""
+        sim = self.sim
+        b = sim.bodies
         self.vf[:] = b.velocity
         self.wf[:] = b.angular_velocity
+        kept = []
+        for lst in (sim.contacts, sim.wall_contacts):
+            n = lst.count
+            idx = np.flatnonzero(lst.active[:n])
+            kept.append((lst, n, idx, lst.history[idx].copy(), lst.active[:n].copy()))
         self.forces(0.0, False)
+        for lst, n, idx, hist, act in kept:
+            lst.history[:n][lst.active[:n] != 0] = 0.0
+            lst.history[idx] = hist
+            lst.active[:n] = act
 
     def advance(self, n: int, dt: float, frames: np.ndarray) -> StepResult:
         """``n`` steps in one compiled call (fewer when a status stops it); a full list
@@ -299,13 +326,11 @@ class CpuBackend:
         return int(self.diag[6])
 
     # ------------------------------------------------------------------ population
-    def keep_bodies(self, keep_b: np.ndarray, keep_e: np.ndarray, new_e: np.ndarray) -> None:
-        """Bodies are being removed: drop their rows of the lists and the integrator
-        state (history of the others kept)."""
-        sim = self.sim
-        sim.contacts.keep_rows(keep_e, new_e, True)
-        sim.wall_contacts.keep_rows(keep_e, new_e, False)
-        self.aux = np.ascontiguousarray(self.aux[keep_b])
+    def keep_bodies(self, keep_b: np.ndarray) -> None:
+        """Bodies are being removed (``keep_b`` False): drop their rows of the
+        integrator state (the contact lists are compacted by the caller). Rows of bodies
+        added since the last attach have no state yet."""
+        self.aux = np.ascontiguousarray(self.aux[keep_b[:len(self.aux)]])
 
     def permute_bodies(self, order: np.ndarray) -> None:
         """The bodies were reordered (:meth:`dpm.Simulation.permute`): the per-body state

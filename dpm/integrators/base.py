@@ -42,6 +42,22 @@ class Integrator:
         """Called once before the first step, after the initial forces are computed
         (``sim.bodies.force``/``torque`` hold them) and ``sim.backend.aux`` is allocated."""
 
+    def start_bodies(self, sim: Any, rows: Any) -> None:
+        """Bodies were added after the start (``rows`` of ``sim.bodies``; their forces
+        are in ``sim.bodies.force``): give them their integrator state. The default
+        restarts the whole integrator when it keeps state (``aux_columns`` or implicit)
+        and does nothing otherwise; an integrator with per-body state overrides it to
+        start the new rows alone, so that the others go on undisturbed."""
+        if self.aux_columns or self.implicit:
+            self.start(sim)
+
+    def dt_changed(self, sim: Any, old_dt: float) -> None:
+        """``sim.dt`` was changed between runs (from ``old_dt``; ``sim.dt`` is the new
+        step): rescale the integrator's state. The default restarts it when it keeps
+        state (the forces of the current state are in ``sim.bodies.force``)."""
+        if self.aux_columns or self.implicit:
+            self.start(sim)
+
     def advance(self, sim: Any, n: int) -> int:
         """Implicit integrators only: advance ``n`` steps of ``sim``; return the number
         of steps done (fewer only when the run must stop, with ``sim.backend.diag[0]`` set)."""

@@ -40,6 +40,13 @@ class PositionVerlet(Integrator):
         sim.backend.aux[:, 0:3] = sim.dt * b.velocity - 0.5 * sim.dt**2 * a
         sim.backend.aux[:, 3:6] = b.velocity
 
+    def start_bodies(self, sim: Any, rows: Any) -> None:
+        """d_0 of the added bodies alone."""
+        b = sim.bodies
+        a = b.force[rows] * b.invmass[rows, None]
+        sim.backend.aux[rows, 0:3] = sim.dt * b.velocity[rows] - 0.5 * sim.dt**2 * a
+        sim.backend.aux[rows, 3:6] = b.velocity[rows]
+
 
 class Gear4(Integrator):
     """Gear predictor-corrector, 4 values (x, v, a, third derivative).
@@ -57,6 +64,14 @@ class Gear4(Integrator):
         """Higher derivatives start at zero; a^p at the current acceleration."""
         sim.backend.aux[:] = 0.0
         sim.backend.aux[:, 0:3] = sim.bodies.force * sim.bodies.invmass[:, None]
+
+    def start_bodies(self, sim: Any, rows: Any) -> None:
+        """The added bodies alone: derivatives zero, a^p their acceleration."""
+        sim.backend.aux[rows] = 0.0
+        sim.backend.aux[rows, 0:3] = sim.bodies.force[rows] * sim.bodies.invmass[rows, None]
+
+    def dt_changed(self, sim: Any, old_dt: float) -> None:
+        """Nothing: a^p and the higher derivatives are kept in physical units."""
 
 
 class Gear5(Gear4):

@@ -68,6 +68,13 @@ class ImplicitIntegrator(Integrator):
                           stalled=0)
         self._ready = False
 
+    def __getstate__(self) -> dict[str, Any]:
+        """A checkpoint keeps the packed scene and candidates; the kernels module is
+        loaded again (from the plan's laws) at the next step."""
+        state = self.__dict__.copy()
+        state.pop("_K", None)
+        return state
+
     # ------------------------------------------------------------------ scene packing
     def _setup(self, sim: Any) -> None:
         b, e = sim.bodies, sim.elements
@@ -215,6 +222,8 @@ class ImplicitIntegrator(Integrator):
     def advance(self, sim: Any, n: int) -> int:
         if not self._ready:
             self.start(sim)
+        elif "_K" not in self.__dict__:  # restored from a checkpoint
+            self._K = _plan.implicit_module(sim.plan.laws)
         b, d = sim.bodies, sim.backend.diag
         tol = self.tolerance * self._rmin
         log = np.zeros(n, np.int64)

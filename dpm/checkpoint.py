@@ -1,0 +1,357 @@
+"""Exact checkpoints and restart.
+
+A checkpoint holds everything a run needs to go on as if it had never stopped: the
+bodies and elements, both contact lists with every contact's history and touching flag,
+the integrator's state, the boundaries (their motions are functions of time, their
+frames at the last step), the inlets (random generator state, what they owe, their
+schedule), the outlets with their records, the output file's position, the event
+schedule and plugin state (the ``dpm_on_checkpoint`` hook). :func:`restart` in a new
+process continues the trajectory of the uninterrupted run bit for bit (with the same dpm,
+numpy and numba; results do not depend on the thread count).
+
+The file is HDF5 (layout in ``docs/reliability.md``): the attributes say what it is
+(``format``, ``format_version``, ``dpm_version``, ``step``, ``time``, the scene's
+``fingerprint`` and ``scene`` description); ``/arrays/aN`` hold the numpy arrays of the
+state; ``/objects`` is the pickled object graph of the simulation (protocol 5) in which
+each of those arrays is a reference ``aN`` (so large state is stored as plain datasets,
+readable with h5py, and arrays shared between containers stay shared). A checkpoint is
+written to a temporary file beside the target, flushed to disk (fsync), then renamed
+onto it: a run killed at any moment leaves the previous checkpoint intact.
+
+Restoring unpickles the object graph: classes are found by their module and name, so a
+scene built from classes defined in a script restarts from that script (``__main__``),
+and a checkpoint is only as trustworthy as its origin (pickle runs code on load: restart
+your own files only).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import pickle
+import re
+import warnings
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ._lazy import lazy_module
+from .errors import ParameterError
+
+h5py = lazy_module("h5py")
+
+if TYPE_CHECKING:
+    from .simulation import Simulation
+
+FORMAT = "dpm-checkpoint"
+FORMAT_VERSION = 1
+#: arrays with fewer items stay inside the pickled object graph
+MIN_DATASET = 32
+#: digits of the step number in the names of periodic checkpoints
+STEP_DIGITS = 10
+
+
+# ----------------------------------------------------------------- scene description
+def _plain(value: Any, depth: int = 0) -> Any:
+    """A JSON-able rendering of a scene object's parameters (for the fingerprint)."""
+    if depth > 6:
+        return repr(type(value).__name__)
+    if isinstance(value, bool | int | str) or value is None:
+        return value
+    if isinstance(value, float | np.floating):
+        return float(value) if np.isfinite(value) else repr(float(value))
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.ndarray):
+        if value.size > 64:  # (a mesh: its size and a digest)
+            return {"shape": list(value.shape),
+                    "sha256": hashlib.sha256(np.ascontiguousarray(value).tobytes()).hexdigest()}
+        return _plain(value.tolist(), depth + 1)
+    if isinstance(value, list | tuple):
+        return [_plain(v, depth + 1) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _plain(v, depth + 1) for k, v in sorted(value.items(), key=str)}
+    params = getattr(value, "params", None)
+    out = {"type": f"{type(value).__module__}.{type(value).__qualname__}"}
+    if isinstance(params, dict):
+        out["params"] = _plain(params, depth + 1)
+    return out
+
+
+def scene_description(sim: Simulation) -> dict[str, Any]:
+    """What the scene is made of (not its state): materials, contact laws, boundaries with
+    their motions, inlets, outlets, periodic box, integrator, gravity. Two scenes with the
+    same description are the same scene."""
+    laws = {f"{sim.materials[a].name}-{sim.materials[b].name}": _plain(law)
+            for (a, b), law in sorted(sim._contacts.items()) if a <= b}
+    return {
+        "integrator": sim.integrator.name,
+        "gravity": _plain(np.asarray(sim.gravity)),
+        "materials": [{"name": m.name, **{k: _plain(v) for k, v in sorted(vars(m).items())
+                                          if k != "name"}} for m in sim.materials],
+        "contacts": laws,
+        "boundaries": [{"kind": bd.name, "material": bd.material.name,
+                        "params": _plain(bd.params), "motion": _plain(bd.motion)}
+                       for bd in sim.boundaries],
+        "inlets": [{"region": _plain(i.region), "material": i.material.name,
+                    "shapes": _plain(i.shapes), "rate": i.rate, "mass_rate": i.mass_rate}
+                   for i in sim.inlets],
+        "outlets": [{"region": _plain(o.region), "remove": o.remove} for o in sim.outlets],
+        "period": _plain(np.asarray(sim.period)),
+    }
+
+
+def fingerprint(description: dict[str, Any]) -> str:
+    return hashlib.sha256(json.dumps(description, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def _difference(a: Any, b: Any, where: str = "") -> str:
+    """The first place where two descriptions differ, in words."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in sorted(set(a) | set(b)):
+            if k not in a or k not in b:
+                return f"{where}{k}: only in the {'checkpoint' if k in a else 'scene'}"
+            d = _difference(a[k], b[k], f"{where}{k}.")
+            if d:
+                return d
+        return ""
+    if isinstance(a, list) and isinstance(b, list):
+        if len(a) != len(b):
+            return f"{where.rstrip('.')}: {len(a)} in the checkpoint, {len(b)} in the scene"
+        for k, (x, y) in enumerate(zip(a, b, strict=True)):
+            d = _difference(x, y, f"{where}{k}.")
+            if d:
+                return d
+        return ""
+    return "" if a == b else f"{where.rstrip('.')}: {a!r} in the checkpoint, {b!r} in the scene"
+
+
+# ----------------------------------------------------------------- pickling with datasets
+class _Pickler(pickle.Pickler):
+    def __init__(self, file: io.BytesIO) -> None:
+        super().__init__(file, protocol=5)
+        self.names: dict[int, str] = {}
+        self.arrays: dict[str, np.ndarray] = {}
+
+    def persistent_id(self, obj: Any) -> str | None:
+        if (type(obj) is np.ndarray and obj.dtype.kind in "biuf"
+                and obj.size >= MIN_DATASET):
+            name = self.names.get(id(obj))
+            if name is None:
+                name = f"a{len(self.arrays)}"
+                self.names[id(obj)] = name
+                self.arrays[name] = obj  # (holds the array: its id stays unique)
+            return name
+        return None
+
+
+class _Unpickler(pickle.Unpickler):
+    def __init__(self, file: io.BytesIO, group: Any) -> None:
+        super().__init__(file)
+        self.group = group
+        self.loaded: dict[str, np.ndarray] = {}
+
+    def persistent_load(self, pid: str) -> np.ndarray:
+        arr = self.loaded.get(pid)
+        if arr is None:
+            arr = np.ascontiguousarray(self.group[pid][()])
+            self.loaded[pid] = arr
+        return arr
+
+
+def _fsync_dir(path: Path) -> None:
+    try:
+        fd = os.open(path.parent, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def write(sim: Simulation, path: str | os.PathLike) -> Path:
+    """Write a checkpoint of ``sim`` to ``path`` atomically; return the path."""
+    from . import __version__
+
+    path = Path(path)
+    if path.is_dir():
+        raise ParameterError(f"sim.checkpoint(): path={str(path)!r} is a directory")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if sim._writer is not None:
+        sim._writer.flush()  # the frames the checkpoint counts are on disk
+    state: dict[str, Any] = {}
+    sim._registry.manager.hook.dpm_on_checkpoint(sim=sim, state=state)
+    sim._plugin_state = state
+    buf = io.BytesIO()
+    pickler = _Pickler(buf)
+    try:
+        pickler.dump(sim)
+    except (pickle.PicklingError, TypeError, AttributeError) as exc:
+        raise ParameterError(f"sim.checkpoint(): the scene holds an object that cannot be "
+                             f"stored ({exc}); objects of the scene (motions, laws, plugin "
+                             "classes) must be picklable, defined at module level") from None
+    description = scene_description(sim)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with h5py.File(tmp, "w") as f:
+            a = f.attrs
+            a["format"] = FORMAT
+            a["format_version"] = FORMAT_VERSION
+            a["dpm_version"] = __version__
+            a["numpy_version"] = np.__version__
+            a["step"] = sim.step_count
+            a["time"] = sim.time
+            a["dt"] = sim.dt
+            a["bodies"] = len(sim.bodies)
+            a["scene"] = json.dumps(description, sort_keys=True)
+            a["fingerprint"] = fingerprint(description)
+            g = f.create_group("arrays")
+            for name, arr in pickler.arrays.items():
+                g.create_dataset(name, data=arr)
+            f.create_dataset("objects", data=np.frombuffer(buf.getvalue(), np.uint8))
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    _fsync_dir(path)
+    return path
+
+
+# ----------------------------------------------------------------- periodic checkpoints
+def numbered(base: Path, step: int) -> Path:
+    """The name of the periodic checkpoint of ``step``: the step number before the last
+    suffix (``run.ckpt.h5`` -> ``run.ckpt.0000012000.h5``)."""
+    return base.with_name(f"{base.stem}.{step:0{STEP_DIGITS}d}{base.suffix}")
+
+
+def numbered_files(base: Path) -> list[tuple[int, Path]]:
+    """(step, path) of the periodic checkpoints of ``base`` on disk, oldest first."""
+    pat = re.compile(re.escape(base.stem) + r"\.(\d{" + str(STEP_DIGITS) + "})"
+                     + re.escape(base.suffix) + "$")
+    found = []
+    if base.parent.is_dir():
+        for p in base.parent.iterdir():
+            m = pat.match(p.name)
+            if m:
+                found.append((int(m.group(1)), p))
+    return sorted(found)
+
+
+class Schedule:
+    """Periodic checkpoints of a run (:meth:`dpm.Simulation.checkpoint_every`): every
+    ``every`` seconds (kept in seconds when dt changes) or ``every_steps`` steps, to
+    numbered files beside ``base``, keeping the last ``keep``."""
+
+    def __init__(self, base: Path, every: float | None, every_steps: int | None,
+                 keep: int, step: int, dt: float) -> None:
+        self.base = base
+        self.every = every
+        self.every_steps = every_steps
+        self.keep = keep
+        self.next_step = step + self.interval(dt)
+
+    def interval(self, dt: float) -> int:
+        if self.every_steps is not None:
+            return int(self.every_steps)
+        return max(1, round(self.every / dt))
+
+    def write(self, sim: Simulation) -> Path:
+        self.next_step = sim.step_count + self.interval(sim.dt)  # (stored as the next one)
+        path = write(sim, numbered(self.base, sim.step_count))
+        for _, old in numbered_files(self.base)[:-self.keep]:
+            old.unlink(missing_ok=True)
+        return path
+
+
+# ----------------------------------------------------------------- restart
+def latest(path: str | os.PathLike) -> Path:
+    """``path`` itself if it is a file, else the newest periodic checkpoint of it."""
+    p = Path(path)
+    if p.is_file():
+        return p
+    files = numbered_files(p)
+    if not files:
+        raise ParameterError(f"dpm.restart(): no checkpoint at {str(p)!r} (nor numbered "
+                             f"ones {numbered(p, 0).name.replace('0' * STEP_DIGITS, 'N' * 4)}"
+                             " beside it)")
+    return files[-1][1]
+
+
+def read_attrs(path: str | os.PathLike) -> dict[str, Any]:
+    """The attributes of a checkpoint (refusing a file that is not one)."""
+    p = Path(path)
+    try:
+        with h5py.File(p, "r") as f:
+            attrs = dict(f.attrs)
+    except OSError as exc:
+        raise ParameterError(f"dpm.restart(): {str(p)!r} cannot be read as a checkpoint "
+                             f"({exc})") from None
+    if attrs.get("format") != FORMAT:
+        raise ParameterError(f"dpm.restart(): {str(p)!r} is not a dpm checkpoint (format="
+                             f"{attrs.get('format')!r}; dpm.load reads output files)")
+    return attrs
+
+
+def restart(path: str | os.PathLike, scene: Simulation | None = None) -> Simulation:
+    """The simulation stored in the checkpoint at ``path`` (or the newest numbered one
+    beside it), ready to run on: ``sim.run(...)`` continues the trajectory bit for bit.
+
+    A checkpoint of another dpm version or format is refused with the reason. With
+    ``scene`` (the same scene built again, by a script or a TOML file) the checkpoint must
+    be of that scene: the first difference is named. The output file the run was writing
+    is reopened and cut back to the frames the checkpoint had written (the restarted run
+    writes the later ones again, identically), periodic checkpoints go on.
+    """
+    from . import __version__
+
+    p = latest(path)
+    attrs = read_attrs(p)
+    if int(attrs.get("format_version", -1)) != FORMAT_VERSION:
+        raise ParameterError(f"dpm.restart(): {str(p)!r} has checkpoint format version "
+                             f"{attrs.get('format_version')}; this dpm reads version "
+                             f"{FORMAT_VERSION}")
+    if attrs.get("dpm_version") != __version__:
+        raise ParameterError(f"dpm.restart(): {str(p)!r} was written by dpm "
+                             f"{attrs.get('dpm_version')}, this is dpm {__version__}: "
+                             "restart it with the version that wrote it")
+    if scene is not None:
+        mine = scene_description(scene)
+        if fingerprint(mine) != attrs["fingerprint"]:
+            theirs = json.loads(attrs["scene"])
+            raise ParameterError(f"dpm.restart(): {str(p)!r} is a checkpoint of another "
+                                 f"scene; first difference: {_difference(theirs, mine)}")
+    with h5py.File(p, "r") as f:
+        blob = f["objects"][()].tobytes()
+        try:
+            sim = _Unpickler(io.BytesIO(blob), f["arrays"]).load()
+        except (AttributeError, ModuleNotFoundError, ImportError) as exc:
+            raise ParameterError(
+                f"dpm.restart(): {str(p)!r} needs a class this process does not have "
+                f"({exc}); restart from the script (or with the plugin) that built the "
+                "scene") from None
+    sim._restored(p)
+    return sim
+
+
+def resume_output(sim: Simulation, state: dict[str, Any] | None) -> None:
+    """Reopen the output file of a restored run at the checkpoint's frame count."""
+    if not state:
+        return
+    from .io.hdf5 import Writer
+
+    path = Path(state["path"])
+    if not path.exists():
+        warnings.warn(f"dpm.restart(): the output file {str(path)!r} of the run is gone; "
+                      "a new one is written from the restart on", stacklevel=3)
+        sim._writer = None
+        return
+    sim._writer = Writer.resume(path, sim, int(state["frames"]), int(state["removed"]))
+    sim.last_output = sim._writer
