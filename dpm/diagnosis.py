@@ -96,10 +96,39 @@ def unstable(sim: Any, what: str) -> UnstableRunError:
     written = ""
     w = sim._writer
     if w is not None:
+        try:  # the failing state as the last frame (unless the last frame is this step)
+            if w.frames == 0 or sim._last_frame_step != sim.step_count:
+                sim._write_frame()
+        except Exception:  # noqa: BLE001  (the diagnosis must not be lost to the output)
+            pass
         w.flush()
-        written = f"; {w.frames} frame(s) written to {w.path} stay readable"
+        written = (f"; {w.frames} frame(s) written to {w.path} stay readable (the last "
+                   "is the failing state)")
+    saved = failure_checkpoint(sim)
+    if saved:
+        written += f"; the failing state is in the checkpoint {saved}"
     sim.close()
     return UnstableRunError(
         f"unstable run at step {sim.step_count} (t = {sim.time:.6g} s): {what}. "
         f"dt = {sim.dt:g} s{hint}. Reduce dt, raise the damping or check the "
         f"stiffness{written}")
+
+
+def failure_checkpoint(sim: Any) -> str:
+    """Write the failing state to a checkpoint beside the output or the periodic
+    checkpoints (``<name>.failed.h5``); "" when the run writes neither."""
+    from pathlib import Path
+
+    base = None
+    if sim._checkpoints is not None:
+        base = sim._checkpoints.base
+    elif sim._writer is not None:
+        base = Path(sim._writer.path)
+    if base is None:
+        return ""
+    path = base.with_name(f"{base.stem}.failed{base.suffix or '.h5'}")
+    try:
+        sim.checkpoint(path)
+    except Exception:  # noqa: BLE001  (the diagnosis must not be lost to the checkpoint)
+        return ""
+    return str(path)

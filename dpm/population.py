@@ -61,6 +61,7 @@ def append_bodies(sim: Any, shape: Shape, imat: int, density: float, pos: np.nda
     owner = np.repeat(np.arange(first, first + n), batch.element_count)
     sim.elements.append(owner, batch.element_offset, batch.element_radius,
                         filled(len(owner), imat, np.int64))
+    sim.energy.added(sim, slice(first, first + n))
     # the lists keep one (empty) row per new element: every contact keeps its history
     sim.contacts.resize_rows(len(sim.elements))
     sim.wall_contacts.resize_rows(len(sim.elements))
@@ -84,6 +85,7 @@ def remove_bodies(sim: Any, ids) -> dict[str, np.ndarray]:
     new_b = np.cumsum(keep_b) - 1
     new_e = np.cumsum(keep_e) - 1
     snapshot_forces(sim)
+    sim.energy.taken(sim, gone)
     if sim._force_snapshot is not None:  # the bodies the removed ones touched
         partners = touching(sim, gone)
         sim._force_snapshot["touched"].append(b.id[partners])

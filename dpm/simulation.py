@@ -14,7 +14,7 @@ from typing import Any
 import numba
 import numpy as np
 
-from . import diagnosis, population, scene_check
+from . import diagnosis, guards, population, scene_check
 from . import measures as _measures
 from . import plan as _plan
 from .backends.base import (
@@ -30,6 +30,7 @@ from .boundaries.base import Boundary
 from .boundaries.joints import join_pipe_ends
 from .errors import ParameterError
 from .flow import Inlet, Outlet
+from .guards import EnergyBook, Escaped, Guards
 from .impact.base import ImpactModel, PairContext
 from .impact.parts import pack_tables
 from .material import Material
@@ -193,6 +194,14 @@ class Simulation:
         #: stop the run when a body moves more than half its radius in a step (contacts
         #: would be missed); False only to measure an integrator's own error past it
         self.speed_guard = True
+        #: the run-time guards: energy, NaN/inf, escaping particles (:mod:`dpm.guards`)
+        self.guards = Guards()
+        #: the energy balance of the run (:class:`dpm.guards.EnergyBook`)
+        self.energy = EnergyBook()
+        #: particles the escape guard removed (:class:`dpm.guards.Escaped`)
+        self.escaped = Escaped()
+        self._scene_box: np.ndarray | None = None
+        self._last_frame_step = -1
         self._writer = None
         #: the Writer of the latest output file (open or closed): .path, .frames
         self.last_output = None
@@ -363,6 +372,7 @@ class Simulation:
         self._material_index(material, call)
         b = cls(material, call=call, **params)
         self.boundaries.append(b)
+        self._scene_box = None
         self._prepared = False
         self._forces_valid = False
         self._force_snapshot = None
@@ -432,6 +442,7 @@ class Simulation:
         self._material_index(material, "sim.add_inlet()")
         inlet = Inlet(region, material, **params)
         self.inlets.append(inlet)
+        self._scene_box = None
         return inlet
 
     def add_outlet(self, region: Region, remove: str = "inside", every: float = 1e-3,
@@ -660,10 +671,13 @@ class Simulation:
                 self._force_snapshot = None
                 self.integrator.start(self)
                 self._integrated_ids = self._next_id
+                self.energy.start(self)
             else:  # after a run: bodies added since start, the others go on
                 population.restore_forces(self)
             self._forces_valid = True
             self._update_boundary_loads()
+        if self._scene_box is None:  # (the escape guard's box: at the start of a run)
+            self._scene_box = guards.scene_box(self)
         from .progress import Progress
 
         hooks = self._registry.manager.hook
@@ -773,12 +787,18 @@ class Simulation:
             self._fail(f"an overlap reached {res.worst_overlap:.3g} of the radius "
                        f"(max_overlap={self.max_overlap:g})"
                        f"{diagnosis.locate(self, res.worst_element)}")
+        t0 = _time.perf_counter()
         if self.speed_guard:
-            self._check_cost = diagnosis.check_speeds(self)
+            diagnosis.check_speeds(self)
+        guards.check(self)
+        self._check_cost = _time.perf_counter() - t0
         return total
 
     def _fail(self, what: str) -> None:
         raise diagnosis.unstable(self, what)
+
+    def _failure(self, what: str) -> Exception:
+        return diagnosis.unstable(self, what)
 
     def _update_boundary_loads(self) -> None:
         w = self.walls
@@ -788,6 +808,8 @@ class Simulation:
                 bd.record_load(self.time, np.zeros(3), np.zeros(3), bd.velocity,
                                bd.angular_velocity)
                 continue
+            bd.work += float(loads[k, 6])
+            loads[k, 6] = 0.0
             f = loads[k, :3].copy()
             # torque about the frame origin o -> about the torque point c
             o = w.frame[k, :3]
@@ -796,6 +818,7 @@ class Simulation:
 
     def _write_frame(self) -> None:
         self._writer.write(self)
+        self._last_frame_step = self.step_count
         self._registry.manager.hook.dpm_on_output(sim=self, frame=self._writer.frames - 1,
                                                   path=self._writer.path)
 

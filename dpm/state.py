@@ -421,7 +421,9 @@ class BoundaryTable:
         self.cell_items = np.asarray(items or [0], np.int64)
         self.frame = np.tile(IDENTITY_FRAME, (nb, 1))
         self.frame_ref = self.frame[:, :12].copy()
-        self.load = np.zeros((nb, 6))
+        #: per boundary: force [0:3], torque about the frame origin [3:6] of the last
+        #: step, work done on the particles since it was last collected [6] (J)
+        self.load = np.zeros((nb, 7))
 
     def __len__(self) -> int:
         return len(self.kind)

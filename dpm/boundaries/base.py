@@ -94,6 +94,9 @@ class Boundary:
         self.angular_velocity = np.zeros(3)
         #: simulated time [s] of the load above
         self.load_time = 0.0
+        #: work [J] the boundary has done on the particles since the first step (its
+        #: drive's energy input; 0 for a boundary at rest)
+        self.work = 0.0
 
     def record_load(self, time: float, force: np.ndarray, torque: np.ndarray,
                     velocity: np.ndarray, angular_velocity: np.ndarray) -> None:

@@ -880,8 +880,24 @@ def finish_step(dt, ctl, bodies, elems, pairs, walls, bnd, diag):
         clear_list_rows(pairs, walls, elems.pos.shape[0])
     # (a run-time True: a literal would compile compute_forces a second time)
     worst = compute_forces(dt, dt == dt, ctl, bodies, elems, pairs, walls, bnd, diag)
+    boundary_work(dt, bnd)
     if worst > ctl.max_overlap:
         diag[0] = STATUS_OVERLAP
+
+
+@jit
+def boundary_work(dt, bnd):
+    """Work [J] each boundary did on the particles in the step, added to ``load[:, 6]``:
+    dt P with P = -(F . v_o + T . omega) at the step's end (F, T the load on the boundary,
+    T about its frame origin o moving at v_o, omega its angular velocity; zero for a
+    boundary at rest)."""
+    f_load, fr = bnd.load, bnd.frame
+    if f_load.shape[1] > 6:
+        for b in range(f_load.shape[0]):
+            p = 0.0
+            for d in range(3):
+                p -= f_load[b, d] * fr[b, 12 + d] + f_load[b, 3 + d] * fr[b, 15 + d]
+            f_load[b, 6] += dt * p
 
 
 @pjit
