@@ -106,10 +106,10 @@ class Guards:
         torques ("warn" still stops at NaN positions: nothing can go on from there).
     escape : {"remove", "warn", "stop", "off"}
         Particles whose centre leaves the scene's box (the box around every finite
-        boundary, inlet and outlet region and the particles at the start of the run, grown by ``escape_margin`` times its
-        size on each side; periodic axes excepted): removed and recorded in
-        ``sim.escaped`` (and ``/removed`` of the output, outlet index -1), warned about,
-        or the run stops.
+        boundary, inlet and outlet region and the particles at the start of the run,
+        grown by ``escape_margin`` times its size on each side; periodic axes
+        excepted): removed and recorded in ``sim.escaped`` (and ``/removed`` of the
+        output, outlet index -1), warned about, or the run stops.
     escape_margin : float
         See ``escape`` (default 1.0).
     """
