@@ -191,7 +191,9 @@ def test_output_checks_the_path_before_the_run(tmp_path):
     with pytest.raises(dpm.ParameterError) as err:
         sim.output(blocker / "run.h5", every_steps=10)
     assert str(blocker / "run.h5") in str(err.value)
-    assert "cannot be created" in str(err.value)
+    assert f"{str(blocker)!r} is a file, not a directory" in str(err.value)
+    with pytest.raises(dpm.ParameterError, match="is a file, not a directory"):
+        sim.output(blocker / "sub" / "run.h5", every_steps=10)
     # a missing directory is created
     sim.output(tmp_path / "a" / "b" / "run.h5", every_steps=10)
     assert (tmp_path / "a" / "b").is_dir() and list((tmp_path / "a" / "b").iterdir()) == []
@@ -199,8 +201,11 @@ def test_output_checks_the_path_before_the_run(tmp_path):
 
 @pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="Linux /proc")
 def test_output_refuses_an_impossible_directory():
-    with pytest.raises(dpm.ParameterError, match="'/proc/dpm-no-such/run.h5'"):
+    # /proc takes no new directory or file, not even from root
+    with pytest.raises(dpm.ParameterError, match="'/proc/dpm-no-such/run.h5'.*cannot be "):
         dpm.Simulation(dt=1e-5).output("/proc/dpm-no-such/run.h5", every_steps=10)
+    with pytest.raises(dpm.ParameterError, match="'/proc/run.h5'.*no file can be created"):
+        dpm.Simulation(dt=1e-5).output("/proc/run.h5", every_steps=10)
 
 
 @pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0,

@@ -131,6 +131,12 @@ def check_output_path(path: str | Path, overwrite: bool, call: str = "sim.output
         if not overwrite:
             raise ParameterError(_exists_message(path))
     parent = path.parent
+    above = parent
+    while not above.exists() and above != above.parent:
+        above = above.parent
+    if not above.is_dir():
+        raise ParameterError(f"{call}: cannot write {str(path)!r}: {str(above)!r} is a "
+                             f"file, not a directory")
     try:
         parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
