@@ -502,31 +502,67 @@ class Simulation:
                 population.share_sphere_arrays(self)
 
     def output(self, path: str, every: float | None = None,
-               every_steps: int | None = None) -> None:
+               every_steps: int | None = None, overwrite: bool = False) -> None:
         """Write frames to HDF5 at ``path`` (+ XDMF beside it) every ``every`` seconds or
         ``every_steps`` steps. The file is created when the next run starts, with the state
-        at that moment as its first frame."""
+        at that moment as its first frame.
+
+        An existing file at ``path`` is kept: this raises :class:`ParameterError` unless
+        ``overwrite=True``, which replaces it (and its XDMF sidecars) when the run starts.
+        Calling ``output()`` again with the path of the file this simulation is writing
+        keeps appending to it (with the new interval); another path closes it first. The
+        path is checked here, before any compile: its directory is created if needed and
+        must be writable, the path must not be a directory."""
+        import os
+
+        from .io.hdf5 import check_output_path
+
+        call = "sim.output()"
+        if isinstance(path, bool) or not isinstance(path, str | os.PathLike):
+            raise ParameterError(f"{call}: path={path!r}; allowed: a file name (str or "
+                                 f"os.PathLike)")
+        name = os.fspath(path)
+        if not isinstance(name, str) or not name.strip():
+            raise ParameterError(f"{call}: path={path!r}; allowed: a non-empty file name")
         if (every is None) == (every_steps is None):
-            raise ParameterError("sim.output(): give exactly one of every (s) or every_steps")
+            raise ParameterError(f"{call}: give exactly one of every (s) or every_steps")
+        value = every if every is not None else every_steps
+        label = "every" if every is not None else "every_steps"
+        if isinstance(value, bool) or not isinstance(value, int | float | np.integer
+                                                     | np.floating):
+            raise ParameterError(f"{call}: {label}={value!r} is not a number")
         if every is not None:
-            validate("sim.output()", {"every": Parameter(low=0.0, low_open=True, unit="s")},
+            validate(call, {"every": Parameter(low=0.0, low_open=True, unit="s")},
                      {"every": every})
         else:
-            validate("sim.output()", {"every_steps": Parameter(low=1, kind="float")},
+            validate(call, {"every_steps": Parameter(low=1, kind="float")},
                      {"every_steps": every_steps})
-        self.close()
-        self._writer = None
-        self._output_path = str(path)
+            if not float(every_steps).is_integer():
+                raise ParameterError(f"{call}: every_steps={every_steps!r}; allowed: an "
+                                     f"integer >= 1")
+        if not isinstance(overwrite, bool | np.bool_):
+            raise ParameterError(f"{call}: overwrite={overwrite!r}; allowed: True or False")
+        target = os.path.realpath(name)
+        w = self._writer
+        appending = (w is not None and not w.closed
+                     and os.path.realpath(w.path) == target)
+        if not appending:
+            check_output_path(name, bool(overwrite))
+            self.close()
+            self._output_path = name
+            self._output_overwrite = bool(overwrite)
         self._output_every_s = every
         self._output_every = None if every is not None else int(every_steps)
+        if appending and every is not None:
+            self._output_every = max(1, round(every / self.dt))
 
     def close(self) -> None:
-        """Close the output file; a later run appends to a new file only after a new
-        :meth:`output` call."""
+        """Close the output file (and cancel an :meth:`output` whose file a run has not
+        created yet); a later run writes a file only after a new :meth:`output` call."""
         if self._writer is not None:
             self._writer.close()
-            self._output_path = None
-            self._writer = None
+        self._writer = None
+        self._output_path = None
 
     # ----------------------------------------------------------------- checks
 
@@ -689,7 +725,8 @@ class Simulation:
 
             if self._output_every_s is not None:
                 self._output_every = max(1, round(self._output_every_s / self.dt))
-            self._writer = Writer(self._output_path, self)
+            self._writer = Writer(self._output_path, self,
+                                  overwrite=self._output_overwrite)
             self.last_output = self._writer
             self._next_output = (self.step_count // self._output_every + 1) * self._output_every
             self._write_frame()

@@ -2,20 +2,29 @@
 
 Per-particle data of all frames are concatenated along the first axis of extendable,
 chunked datasets under ``/particles``; frame k holds rows ``start[k] : start[k] + count[k]``
-(the particle count may change between frames). The file is written in SWMR mode and
-flushed after every frame; ``/frames/time`` is extended last, so a run killed at any moment
-leaves a readable file whose frames are the ones fully written.
+(the particle count may change between frames).
+
+Durability: the file is built with its whole layout under a temporary name in the same
+directory, fsynced and renamed onto its name (``os.replace``), so a file at the final name
+always opens; it is then reopened in SWMR mode and flushed after every frame. Each frame
+is flushed in two steps, the particle rows and the frame table first, ``/frames/time``
+extended last, so a run killed at any moment leaves a readable file whose frames are the
+ones fully written (:func:`load` also drops a frame whose rows are not all there).
 """
 
 from __future__ import annotations
 
+import os
+import tempfile
 import time as _time
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._lazy import lazy_module
+from ..errors import ParameterError
 
 h5py = lazy_module("h5py")
 
@@ -41,67 +50,310 @@ ELEMENT_FIELDS = {"position": (3, "f8"), "radius": (0, "f8"), "body_id": (0, "i8
 REMOVED_FIELDS = {"id": (0, "i8"), "time": (0, "f8"), "mass": (0, "f8"),
                   "residence_time": (0, "f8"), "position": (3, "f8"), "velocity": (3, "f8"),
                   "outlet": (0, "i4")}
+#: the frame table, one entry per frame (``time`` extended last)
+FRAME_FIELDS = {"time": "f8", "step": "i8", "start": "i8", "count": "i8",
+                "element_start": "i8", "element_count": "i8"}
+#: the XDMF sidecar is rewritten after a frame when the last write is older than this [s]
+#: (and after the first frame, at every flush and at close)
 XDMF_INTERVAL_S = 5.0
+#: rows copied at a time when a file is rebuilt (:meth:`Writer.resume`)
+_COPY_BLOCK_BYTES = 64 << 20
+
+
+def _fsync(path: Path, directory: bool = False) -> None:
+    try:
+        fd = os.open(path, os.O_RDONLY | (getattr(os, "O_DIRECTORY", 0) if directory else 0))
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass  # a file system without fsync on directories
+    finally:
+        os.close(fd)
+
+
+def _temp_beside(path: Path, suffix: str = ".tmp") -> Path:
+    """A new empty file in the directory of ``path`` (hidden, unique name), with the mode
+    a plain new file would get (mkstemp's is 0600)."""
+    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+    try:
+        os.fchmod(fd, 0o666 & ~_umask())
+    except (AttributeError, OSError):
+        pass
+    finally:
+        os.close(fd)
+    return Path(name)
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _publish(tmp: Path, path: Path, overwrite: bool) -> None:
+    """Rename the finished ``tmp`` onto ``path``: atomically; without ``overwrite`` never
+    over an existing file (a hard link fails when the name exists)."""
+    _fsync(tmp)
+    if overwrite:
+        os.replace(tmp, path)
+    else:
+        try:
+            os.link(tmp, path)
+        except FileExistsError:
+            tmp.unlink(missing_ok=True)
+            raise ParameterError(_exists_message(path)) from None
+        except OSError:  # no hard links on this file system: check, then rename
+            if path.exists():
+                tmp.unlink(missing_ok=True)
+                raise ParameterError(_exists_message(path)) from None
+            os.replace(tmp, path)
+        else:
+            tmp.unlink()
+    _fsync(path.parent, directory=True)
+
+
+def _exists_message(path: Path | str) -> str:
+    return (f"sim.output(): {str(path)!r} already exists and is kept; pass overwrite=True "
+            f"to replace it (and its XDMF sidecars) or choose another name")
+
+
+def check_output_path(path: str | Path, overwrite: bool, call: str = "sim.output()") -> None:
+    """Check at ``output()`` time that a run file can be created at ``path``: not a
+    directory, not an existing file unless ``overwrite``, its directory exists or is
+    created here, and a file can be created and removed there. Raises ParameterError
+    naming the path and the reason."""
+    path = Path(path)
+    if path.is_dir():
+        raise ParameterError(f"{call}: cannot write {str(path)!r}: it is a directory")
+    if path.exists() or path.is_symlink():
+        if not overwrite:
+            raise ParameterError(_exists_message(path))
+    parent = path.parent
+    above = parent
+    while not above.exists() and above != above.parent:
+        above = above.parent
+    if not above.is_dir():
+        raise ParameterError(f"{call}: cannot write {str(path)!r}: {str(above)!r} is a "
+                             f"file, not a directory")
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ParameterError(f"{call}: cannot write {str(path)!r}: its directory "
+                             f"{str(parent)!r} cannot be created "
+                             f"({e.strerror or e})") from None
+    if not parent.is_dir():
+        raise ParameterError(f"{call}: cannot write {str(path)!r}: {str(parent)!r} is not "
+                             f"a directory")
+    try:
+        probe = _temp_beside(path, suffix=".probe")
+        probe.unlink()
+    except OSError as e:
+        raise ParameterError(f"{call}: cannot write {str(path)!r}: no file can be created "
+                             f"in {str(parent)!r} ({e.strerror or e})") from None
+
+
+def sidecars(path: str | Path) -> tuple[Path, Path]:
+    """The XDMF sidecars of a run file: ``run.xdmf`` and ``run.elements.xdmf``."""
+    path = Path(path)
+    return path.with_suffix(".xdmf"), path.with_suffix(".elements.xdmf")
+
+
+def _layout(f: Any, sim: Simulation) -> None:
+    """Attributes and every dataset (empty) of a new run file."""
+    from .. import __version__
+
+    f.attrs["format"] = FORMAT
+    f.attrs["format_version"] = FORMAT_VERSION
+    f.attrs["dpm_version"] = __version__
+    f.attrs["dt"] = sim.dt
+    f.attrs["gravity"] = sim.gravity
+    f.attrs["integrator"] = sim.integrator.name
+    f.attrs["materials"] = [m.name for m in sim.materials] or [""]
+    f.attrs["boundaries"] = [b.name for b in sim.boundaries] or [""]
+
+    def group(name: str, fields: dict[str, tuple[int, str]], rows: int) -> None:
+        g = f.create_group(name)
+        for field, (width, dtype) in fields.items():
+            shape = (0, width) if width else (0,)
+            maxshape = (None, width) if width else (None,)
+            chunk = (rows, width) if width else (rows,)
+            g.create_dataset(field, shape=shape, maxshape=maxshape, dtype=dtype, chunks=chunk)
+
+    group("particles", {k: (w, d) for k, (w, d, _) in FIELDS.items()},
+          min(max(len(sim.bodies), 1), 65536))
+    # sphere elements of clustered bodies (empty when every body is one sphere)
+    group("elements", ELEMENT_FIELDS, min(max(len(sim.elements), 1), 65536))
+    group("frames", {k: (0, d) for k, d in FRAME_FIELDS.items()}, 1024)
+    nb = max(len(sim.boundaries), 1)
+    bg = f.create_group("boundaries")
+    for name in ("force", "torque"):
+        bg.create_dataset(name, shape=(0, nb, 3), maxshape=(None, nb, 3), dtype="f8",
+                          chunks=(64, nb, 3))
+    group("removed", REMOVED_FIELDS, 1024)
+
+
+def complete_frames(f: Any) -> tuple[int, int, int]:
+    """``(frames, particle_rows, element_rows)`` of the complete frames of an open run file:
+    the length of ``/frames/time``, less any trailing frame whose rows are not all written
+    (a file that a killed run left behind)."""
+    fr = f["frames"]
+    n = min(len(fr[k]) for k in FRAME_FIELDS if k in fr)
+    if "boundaries" in f:
+        n = min(n, *(len(f["boundaries"][k]) for k in f["boundaries"]))
+    rows = min(len(f["particles"][k]) for k in f["particles"])
+    has_el = "elements" in f and "element_start" in fr
+    erows = min(len(f["elements"][k]) for k in f["elements"]) if has_el else 0
+    if n == 0:
+        return 0, 0, 0
+    start, count = fr["start"][:n], fr["count"][:n]
+    ok = start + count <= rows
+    if has_el:
+        ok &= fr["element_start"][:n] + fr["element_count"][:n] <= erows
+    if not ok.all():
+        n = int(np.argmin(ok))
+    if n == 0:
+        return 0, 0, 0
+    k = n - 1
+    end = int(start[k] + count[k])
+    eend = int(fr["element_start"][k] + fr["element_count"][k]) if has_el else 0
+    return n, end, eend
+
+
+def complete_removed(f: Any) -> int:
+    if "removed" not in f:
+        return 0
+    return min(len(f["removed"][k]) for k in f["removed"])
+
+
+def _check_format(f: Any, path: Path) -> None:
+    fmt = f.attrs.get("format")
+    if isinstance(fmt, bytes):
+        fmt = fmt.decode()
+    if fmt != FORMAT:
+        raise ParameterError(f"{str(path)!r} is not a dpm run file (format attribute "
+                             f"{fmt!r}, expected {FORMAT!r})")
+    version = int(f.attrs.get("format_version", 0))
+    if version > FORMAT_VERSION:
+        raise ParameterError(f"{str(path)!r} has format_version {version}; this dpm reads "
+                             f"up to {FORMAT_VERSION}")
 
 
 class Writer:
-    """Append frames of a :class:`dpm.Simulation` to an HDF5 file (and its XDMF sidecar)."""
+    """Append frames of a :class:`dpm.Simulation` to an HDF5 file (and its XDMF sidecar).
 
-    def __init__(self, path: str | Path, sim: Simulation) -> None:
-        from .. import __version__
+    ``Writer(path, sim)`` creates the file atomically (see the module docstring); an
+    existing file at ``path`` is kept and :class:`ParameterError` raised unless
+    ``overwrite=True``, which replaces it and removes its XDMF sidecars.
+    :meth:`resume` reopens an existing run file instead, cut back to a checkpoint.
+    """
 
+    def __init__(self, path: str | Path, sim: Simulation, overwrite: bool = False) -> None:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.file = h5py.File(self.path, "w", libver="latest")
-        f = self.file
-        f.attrs["format"] = FORMAT
-        f.attrs["format_version"] = FORMAT_VERSION
-        f.attrs["dpm_version"] = __version__
-        f.attrs["dt"] = sim.dt
-        f.attrs["gravity"] = sim.gravity
-        f.attrs["integrator"] = sim.integrator.name
-        f.attrs["materials"] = [m.name for m in sim.materials] or [""]
-        f.attrs["boundaries"] = [b.name for b in sim.boundaries] or [""]
-        n_guess = max(len(sim.bodies), 1)
-        g = f.create_group("particles")
-        for name, (width, dtype, _) in FIELDS.items():
-            shape = (0, width) if width else (0,)
-            maxshape = (None, width) if width else (None,)
-            chunk = (min(n_guess, 65536), width) if width else (min(n_guess, 65536),)
-            g.create_dataset(name, shape=shape, maxshape=maxshape, dtype=dtype, chunks=chunk)
-        # sphere elements of clustered bodies (empty when every body is one sphere)
+        if self.path.is_dir():
+            raise ParameterError(f"sim.output(): {str(self.path)!r} is a directory")
+        if not overwrite and self.path.exists():
+            raise ParameterError(_exists_message(self.path))
+        tmp = _temp_beside(self.path)
+        try:
+            with h5py.File(tmp, "w", libver="latest") as f:
+                _layout(f, sim)
+            _publish(tmp, self.path, overwrite)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+        for s in sidecars(self.path):  # those of a replaced file describe other frames
+            s.unlink(missing_ok=True)
+        self._open()
         self.clusters = not (sim.plan is None or sim.plan.spheres_only)
-        m_guess = max(len(sim.elements), 1)
-        eg = f.create_group("elements")
-        for name, (width, dtype) in ELEMENT_FIELDS.items():
-            shape = (0, width) if width else (0,)
-            maxshape = (None, width) if width else (None,)
-            chunk = (min(m_guess, 65536), width) if width else (min(m_guess, 65536),)
-            eg.create_dataset(name, shape=shape, maxshape=maxshape, dtype=dtype, chunks=chunk)
-        fr = f.create_group("frames")
-        for name, dtype in (("time", "f8"), ("step", "i8"), ("start", "i8"), ("count", "i8"),
-                            ("element_start", "i8"), ("element_count", "i8")):
-            fr.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(1024,))
-        nb = max(len(sim.boundaries), 1)
-        bg = f.create_group("boundaries")
-        for name in ("force", "torque"):
-            bg.create_dataset(name, shape=(0, nb, 3), maxshape=(None, nb, 3), dtype="f8",
-                              chunks=(64, nb, 3))
-        rg = f.create_group("removed")
-        for name, (width, dtype) in REMOVED_FIELDS.items():
-            shape = (0, width) if width else (0,)
-            maxshape = (None, width) if width else (None,)
-            chunk = (1024, width) if width else (1024,)
-            rg.create_dataset(name, shape=shape, maxshape=maxshape, dtype=dtype, chunks=chunk)
-        f.swmr_mode = True
-        self.removed = 0
         self.frames = 0
         self.rows = 0
         self.element_rows = 0
+        self.removed = 0
+
+    def _open(self) -> None:
+        self.file = h5py.File(self.path, "r+", libver="latest")
+        self.file.swmr_mode = True
         self._last_xdmf = 0.0
+
+    @classmethod
+    def resume(cls, path: str | Path, sim: Simulation, frames: int, removed: int) -> Writer:
+        """Reopen the dpm run file ``path`` for appending, cut back to its first ``frames``
+        frames and ``removed`` removal records (a checkpoint's :meth:`state`): every
+        ``/particles``, ``/elements``, ``/frames``, ``/boundaries`` and ``/removed`` dataset
+        is truncated consistently, and the next :meth:`write` appends frame ``frames``.
+
+        The frames after a checkpoint are the ones the restarted run writes again (the
+        same states), so dropping them loses nothing. A file that a killed run left open
+        (HDF5 refuses to reopen it for writing) is rebuilt: its kept frames are copied into
+        a new file that atomically replaces it.
+        """
+        path = Path(path)
+        call = f"Writer.resume({str(path)!r})"
+        for name, value in (("frames", frames), ("removed", removed)):
+            if (isinstance(value, bool) or not isinstance(value, int | np.integer)
+                    or value < 0):
+                raise ParameterError(f"{call}: {name}={value!r}; allowed: an integer >= 0")
+        frames, removed = int(frames), int(removed)
+        if not path.is_file():
+            raise ParameterError(f"{call}: no such file")
+        try:
+            f = h5py.File(path, "r+", libver="latest")
+            rebuild = False
+        except OSError as e:
+            if "lock" in str(e).lower():
+                raise ParameterError(f"{call}: the file is open in another process (a run "
+                                     f"still writing it?): {e}") from None
+            try:  # left open for SWMR writing by a killed run, or not HDF5 at all
+                f = _open(path)
+            except OSError as e2:
+                raise ParameterError(f"{call}: not a dpm run file ({e2})") from None
+            rebuild = True
+        try:
+            _check_format(f, path)
+            n, _, _ = complete_frames(f)
+            if frames > n:
+                raise ParameterError(f"{call}: the file has {n} complete frame(s); cannot "
+                                     f"resume after frame {frames}")
+            n_removed = complete_removed(f)
+            if removed > n_removed:
+                raise ParameterError(f"{call}: the file has {n_removed} removal record(s); "
+                                     f"cannot keep {removed}")
+            nb = f["boundaries/force"].shape[1]
+            if max(len(sim.boundaries), 1) != nb:
+                raise ParameterError(f"{call}: the file has {nb} boundary column(s), the "
+                                     f"simulation {len(sim.boundaries)} boundaries")
+            rows = erows = 0
+            if frames:
+                fr, k = f["frames"], frames - 1
+                rows = int(fr["start"][k] + fr["count"][k])
+                erows = int(fr["element_start"][k] + fr["element_count"][k])
+            sizes = {"frames": frames, "boundaries": frames, "particles": rows,
+                     "elements": erows, "removed": removed}
+            if not rebuild:
+                _truncate(f, sizes)
+        finally:
+            f.close()
+        if rebuild:
+            _rebuild(path, sizes)
+        w = cls.__new__(cls)
+        w.path = path
+        w._open()
+        w.clusters = (erows > 0 if sim.plan is None else not sim.plan.spheres_only)
+        w.frames, w.rows, w.element_rows, w.removed = frames, rows, erows, removed
+        w.write_xdmf()
+        return w
+
+    def state(self) -> dict[str, Any]:
+        """What a checkpoint stores to :meth:`resume` this file: frames, removed, path."""
+        return {"frames": self.frames, "removed": self.removed, "path": str(self.path)}
 
     def write(self, sim: Simulation) -> None:
         """Append the current state as a frame and flush it to disk."""
+        if sim.plan is not None:
+            self.clusters = not sim.plan.spheres_only
         b = sim.bodies
         n = len(b)
         g = self.file["particles"]
@@ -132,13 +384,15 @@ class Writer:
                             ("element_start", self.element_rows), ("element_count", m)):
             fr[name].resize(self.frames + 1, axis=0)
             fr[name][self.frames] = value
-        self.rows += n
-        self.element_rows += m
-        # the frame count is the length of /frames/time: extended last
+        # the frame count is the length of /frames/time: extended last, after a flush of
+        # everything else, so that no frame is ever on disk before its rows
+        self.file.flush()
         fr["time"].resize(self.frames + 1, axis=0)
         fr["time"][self.frames] = sim.time
-        self.frames += 1
         self.file.flush()
+        self.rows += n
+        self.element_rows += m
+        self.frames += 1
         now = _time.monotonic()
         if self.frames == 1 or now - self._last_xdmf > XDMF_INTERVAL_S:
             self.write_xdmf()
@@ -152,6 +406,8 @@ class Writer:
         rg = self.file["removed"]
         values = dict(records, outlet=np.full(n, outlet))
         for name in [k for k in REMOVED_FIELDS if k != "id"] + ["id"]:
+            if name == "id":
+                self.file.flush()
             ds = rg[name]
             ds.resize(self.removed + n, axis=0)
             ds[self.removed:self.removed + n] = values[name]
@@ -159,20 +415,27 @@ class Writer:
         self.file.flush()
 
     def write_xdmf(self) -> None:
+        """Rewrite the XDMF sidecar(s) for the frames written so far (atomically)."""
         from .xdmf import write_xdmf_from_arrays
 
         fr = self.file["frames"]
-        write_xdmf_from_arrays(self.path, fr["time"][:], fr["start"][:], fr["count"][:],
+        k = self.frames
+        write_xdmf_from_arrays(self.path, fr["time"][:k], fr["start"][:k], fr["count"][:k],
                                self.rows)
         if self.clusters:
-            write_xdmf_from_arrays(self.path, fr["time"][:], fr["element_start"][:],
-                                   fr["element_count"][:], self.element_rows,
+            write_xdmf_from_arrays(self.path, fr["time"][:k], fr["element_start"][:k],
+                                   fr["element_count"][:k], self.element_rows,
                                    group="elements")
+
+    @property
+    def closed(self) -> bool:
+        return not self.file.id.valid
 
     def flush(self) -> None:
         if self.file.id.valid:
             self.file.flush()
             self.write_xdmf()
+            self._last_xdmf = _time.monotonic()
 
     def close(self) -> None:
         if self.file.id.valid:
@@ -180,19 +443,61 @@ class Writer:
             self.file.close()
 
 
+def _truncate(f: Any, sizes: dict[str, int]) -> None:
+    """Cut every dataset of the groups in ``sizes`` to that many rows, in place: the frame
+    count (``/frames/time``) and removal count (``/removed/id``) first."""
+    for group in ("frames", "removed", "boundaries", "particles", "elements"):
+        if group not in f:
+            continue
+        g = f[group]
+        names = sorted(g, key=lambda k: k not in ("time", "id") or group == "particles")
+        for name in names:
+            if g[name].shape[0] > sizes[group]:
+                g[name].resize(sizes[group], axis=0)
+    f.flush()
+
+
+def _rebuild(path: Path, sizes: dict[str, int]) -> None:
+    """Copy the file with each group cut to ``sizes`` rows into a new file that atomically
+    replaces it (same attributes, datasets, dtypes, chunks)."""
+    tmp = _temp_beside(path)
+    try:
+        with _open(path) as src, h5py.File(tmp, "w", libver="latest") as dst:
+            dst.attrs.update(src.attrs)
+            for gname, g in src.items():
+                out = dst.create_group(gname)
+                out.attrs.update(g.attrs)
+                for name, ds in g.items():
+                    rows = min(ds.shape[0], sizes.get(gname, ds.shape[0]))
+                    new = out.create_dataset(name, shape=(rows,) + ds.shape[1:],
+                                             maxshape=ds.maxshape, dtype=ds.dtype,
+                                             chunks=ds.chunks, compression=ds.compression,
+                                             compression_opts=ds.compression_opts)
+                    new.attrs.update(ds.attrs)
+                    row_bytes = max(ds.dtype.itemsize * int(np.prod(ds.shape[1:])), 1)
+                    block = max(_COPY_BLOCK_BYTES // row_bytes, 1)
+                    for a in range(0, rows, block):
+                        new[a:min(a + block, rows)] = ds[a:min(a + block, rows)]
+        _publish(tmp, path, overwrite=True)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
 class Run:
     """A run read back from HDF5 (see :func:`load`).
 
     ``times``, ``steps`` (n_frames,); ``frame(k)`` a dict of the per-particle arrays of
     frame k; ``field(name)`` the list of one field over all frames; ``attrs`` the file
-    attributes; ``boundary_force`` (n_frames, n_boundaries, 3).
+    attributes; ``boundary_force`` (n_frames, n_boundaries, 3). A file with no frame yet
+    (a run killed right after it started) has ``n_frames == 0``.
     """
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
         with _open(self.path) as f:
             self.attrs: dict[str, Any] = dict(f.attrs)
-            n = len(f["frames/time"])
+            n, self._rows, self._element_rows = complete_frames(f)
             self.times = f["frames/time"][:n]
             self.steps = f["frames/step"][:n]
             self.start = f["frames/start"][:n]
@@ -203,7 +508,7 @@ class Run:
             #: velocity, outlet (index in sim.outlets)
             self.removed: dict[str, np.ndarray] = {}
             if "removed" in f:
-                m = len(f["removed/id"])
+                m = complete_removed(f)
                 self.removed = {k: f["removed"][k][:m] for k in REMOVED_FIELDS}
 
     def __len__(self) -> int:
@@ -213,10 +518,14 @@ class Run:
     def n_frames(self) -> int:
         return len(self.times)
 
-    def frame(self, k: int) -> dict[str, np.ndarray]:
+    def _index(self, k: int) -> int:
         if not -len(self) <= k < len(self):
-            raise IndexError(f"frame {k} out of range for {len(self)} frames")
-        k = k % len(self)
+            raise IndexError(f"frame {k} out of range: {self.path} has {len(self)} "
+                             f"complete frame(s)")
+        return k % len(self)
+
+    def frame(self, k: int) -> dict[str, np.ndarray]:
+        k = self._index(k)
         a, n = int(self.start[k]), int(self.count[k])
         with _open(self.path) as f:
             out = {name: f["particles"][name][a:a + n] for name in FIELDS}
@@ -227,7 +536,7 @@ class Run:
     def elements(self, k: int) -> dict[str, np.ndarray]:
         """Sphere elements of frame k (clustered bodies): position, radius, body_id; empty
         arrays when every body is a single sphere."""
-        k = k % len(self)
+        k = self._index(k)
         with _open(self.path) as f:
             fr = f["frames"]
             a, n = int(fr["element_start"][k]), int(fr["element_count"][k])
@@ -241,12 +550,68 @@ class Run:
             return [ds[int(a):int(a) + int(n)] for a, n in zip(self.start, self.count,
                                                                strict=True)]
 
+    def write_xdmf(self) -> Path:
+        """Rewrite the XDMF sidecar(s) beside the file; returns the particles' one."""
+        return write_xdmf(self.path)
+
 
 def _open(path: Path) -> h5py.File:
     # swmr=True reads a file that a writer still holds open or that a killed run left behind
     return h5py.File(path, "r", libver="latest", swmr=True)
 
 
-def load(path: str | Path) -> Run:
-    """Read a dpm HDF5 run back."""
-    return Run(path)
+def write_xdmf(path: str | Path) -> Path:
+    """(Re)write the XDMF sidecar(s) of the dpm run file ``path`` for its complete frames
+    (``run.xdmf``, and ``run.elements.xdmf`` for clustered bodies); returns the first."""
+    from .xdmf import write_xdmf as _write
+
+    return _write(path)
+
+
+def _xdmf_frames(path: Path) -> int | None:
+    """Frames the XDMF sidecar ``path`` lists (None when there is none or it is unreadable)."""
+    try:
+        return path.read_text().count('GridType="Uniform"')
+    except (OSError, UnicodeDecodeError):
+        return None
+
+
+def check_xdmf(run: Run) -> None:
+    """Rewrite the sidecar(s) of ``run`` (with a warning) when one lists another number of
+    frames than the HDF5 file has (a killed run, or a file cut back by a resume)."""
+    particles, elements = sidecars(run.path)
+    stale = []
+    for side, needed in ((particles, True), (elements, run._element_rows > 0)):
+        if not needed:
+            continue
+        listed = _xdmf_frames(side)
+        if listed is None and not side.exists() and run.n_frames == 0:
+            continue
+        if listed != run.n_frames:
+            stale.append(f"{side.name} lists {'no' if listed is None else listed} frame(s)")
+    if not stale:
+        return
+    what = f"dpm.load({str(run.path)!r}): {' and '.join(stale)}, the file has {run.n_frames}"
+    writable = (os.access(run.path, os.W_OK) and os.access(run.path.parent, os.W_OK)
+                and all(not s.exists() or os.access(s, os.W_OK) for s in (particles,
+                                                                            elements)))
+    if not writable:
+        warnings.warn(f"{what}; the file is read-only, the sidecar is not rewritten",
+                      stacklevel=3)
+        return
+    try:
+        run.write_xdmf()
+    except OSError as e:
+        warnings.warn(f"{what}; rewriting the sidecar failed: {e}", stacklevel=3)
+        return
+    warnings.warn(f"{what}; rewrote the sidecar (a killed run?)", stacklevel=3)
+
+
+def load(path: str | Path, repair_xdmf: bool = True) -> Run:
+    """Read a dpm HDF5 run back. With ``repair_xdmf`` a sidecar that lists another number
+    of frames than the file has is rewritten (with a warning), unless the file is
+    read-only."""
+    run = Run(path)
+    if repair_xdmf:
+        check_xdmf(run)
+    return run

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from .._lazy import lazy_module
@@ -59,17 +60,28 @@ def write_xdmf_from_arrays(h5path: Path, times, starts, counts, rows: int,
         out.append("</Grid>")
     out.append("</Grid></Domain></Xdmf>")
     path = h5path.with_suffix(".xdmf" if group == "particles" else ".elements.xdmf")
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text("\n".join(out))
-    tmp.replace(path)
+    # atomic: a kill never leaves a half-written sidecar (a unique temporary name, so two
+    # processes rewriting the same sidecar do not mix their writes)
+    from .hdf5 import _temp_beside
+
+    tmp = _temp_beside(path)
+    try:
+        tmp.write_text("\n".join(out))
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
     return path
 
 
 def write_xdmf(h5path: str | Path) -> Path:
-    """(Re)write the XDMF sidecar of an existing dpm HDF5 run."""
+    """(Re)write the XDMF sidecar(s) of an existing dpm HDF5 run for its complete frames;
+    returns the path of ``run.xdmf``."""
+    from .hdf5 import complete_frames
+
     with h5py.File(h5path, "r", libver="latest", swmr=True) as f:
-        n = len(f["frames/time"])
-        if "elements" in f and len(f["elements/radius"]):
+        n, _, erows = complete_frames(f)
+        if erows:
             write_xdmf_from_arrays(Path(h5path), f["frames/time"][:n],
                                    f["frames/element_start"][:n], f["frames/element_count"][:n],
                                    len(f["elements/radius"]), group="elements")
