@@ -553,8 +553,10 @@ class Simulation:
             self._output_overwrite = bool(overwrite)
         self._output_every_s = every
         self._output_every = None if every is not None else int(every_steps)
-        if appending and every is not None:
-            self._output_every = max(1, round(every / self.dt))
+        if appending:
+            if every is not None:
+                self._output_every = max(1, round(every / self.dt))
+            self._next_output = self.step_count + self._output_every
 
     def close(self) -> None:
         """Close the output file (and cancel an :meth:`output` whose file a run has not
