@@ -12,6 +12,7 @@ is built.
 
 from __future__ import annotations
 
+import difflib
 import tomllib
 from collections.abc import Iterable
 from pathlib import Path
@@ -40,7 +41,7 @@ def read_scene(path: str | Path) -> dict[str, Any]:
         raise ParameterError(f"{path}: the scene file does not exist"
                              + (" (it is a directory)" if path.is_dir() else ""))
     try:
-        doc = tomllib.loads(path.read_text())
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{path}: not valid TOML: {exc}") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -53,8 +54,23 @@ def read_scene(path: str | Path) -> dict[str, Any]:
 
 def _unknown(where: str, table: dict, allowed: Iterable[str]) -> list[str]:
     allowed = sorted(set(allowed))
-    return [f"{where}: unknown key {k} = {table[k]!r}; allowed: {', '.join(allowed)}"
-            for k in table if k not in allowed]
+    out = []
+    for k in table:
+        if k not in allowed:
+            close = difflib.get_close_matches(k, allowed, n=1)
+            hint = f" (did you mean {close[0]}?)" if close else ""
+            out.append(f"{where}: unknown key {k} = {table[k]!r}{hint}; allowed: "
+                       f"{', '.join(allowed)}")
+    return out
+
+
+def _misspelt(where: str, table: dict, base: Iterable[str]) -> list[str]:
+    """Keys close to one of ``base`` but not it (a misspelt kind, shape or model key,
+    when the rest of the table cannot be checked)."""
+    base = list(base)
+    return [f"{where}: unknown key {k} = {table[k]!r} (did you mean {close[0]}?)"
+            for k in table if k not in base
+            for close in [difflib.get_close_matches(k, base, n=1)] if close]
 
 
 def _params(kind: str, name: Any, where: str) -> tuple[list[str], list[str]]:
@@ -125,11 +141,13 @@ def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
     for k, c in enumerate(doc.get("contacts", [])):
         names, bad = _params("impact_model", c.get("model", "hertz_mindlin"),
                              f"contacts[{k}]: model")
-        problems += bad or _unknown(f"contacts[{k}]", c, ["materials", "model", *names])
+        problems += (bad + _misspelt(f"contacts[{k}]", c, ["materials", "model"]) if bad
+                     else _unknown(f"contacts[{k}]", c, ["materials", "model", *names]))
     for k, b in enumerate(doc.get("boundaries", [])):
         names, bad = _params("boundary", b.get("kind"), f"boundaries[{k}]: kind")
-        problems += bad or _unknown(f"boundaries[{k}]", b, ["kind", "material", "motion",
-                                                            *names])
+        base = ["kind", "material", "motion"]
+        problems += (bad + _misspelt(f"boundaries[{k}]", b, base) if bad
+                     else _unknown(f"boundaries[{k}]", b, [*base, *names]))
         if "motion" in b:
             problems += _motion(f"boundaries[{k}]", b["motion"])
     for k, per in enumerate(doc.get("periodic", [])):
@@ -159,7 +177,8 @@ def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
     for k, p in enumerate(doc.get("particles", [])):
         where = f"particles[{k}]"
         names, bad = _params("shape", p.get("shape", "sphere"), f"{where}: shape")
-        problems += bad or _unknown(where, p, [*PARTICLE_KEYS, *names])
+        problems += (bad + _misspelt(where, p, PARTICLE_KEYS) if bad
+                     else _unknown(where, p, [*PARTICLE_KEYS, *names]))
         sources = [s for s in ("csv", "lattice", "positions") if s in p]
         if len(sources) != 1:
             problems.append(f"{where}: give exactly one of csv, lattice, positions (got "

@@ -651,7 +651,7 @@ def _rows(call: str, name: str, value: Any, width: int, n: int | None = None) ->
     if name == "positions" and arr.ndim == 2:  # before the copy: at least one element each
         from ._memory import check_request
 
-        check_request(call, len(arr), len(arr))
+        check_request(f"{call}: positions:", len(arr), len(arr))
     if arr is value:  # a float array given: a copy, as for any other input
         arr = arr.copy()
     if arr.ndim == 1 and arr.size == width and n in (None, 1):

@@ -14,6 +14,10 @@ from .base import Boundary, Primitives
 
 #: dihedral angle [rad] below which an edge counts as flat (inactive)
 FLAT_ANGLE = 1e-6
+#: a face whose area is at most this times its longest edge squared is degenerate (its
+#: vertices on a line up to rounding, float32 rounding included: STL stores float32; a
+#: height under 2e-6 of its longest edge) and dropped
+DEGENERATE = 1e-6
 
 
 class Mesh(Boundary):
@@ -28,7 +32,8 @@ class Mesh(Boundary):
     inactive, so a sphere rolling over a flat meshed floor feels exactly the plane force.
     Edges of one face only (open borders) and convex edges are active. Triangles are
     found through a uniform grid in the mesh's frame, so the search cost per sphere does not
-    grow with the triangle count. Degenerate (zero-area) faces are dropped; a mesh with
+    grow with the triangle count. Degenerate faces (zero area, up to ``DEGENERATE``) are
+    dropped; a mesh with
     no face of non-zero area left, a missing or unreadable file, or non-finite vertices is
     refused.
 
@@ -87,7 +92,9 @@ class Mesh(Boundary):
         if not np.all(np.isfinite(tm.vertices)):
             raise ParameterError(f"{call}: {what}: the mesh has NaN or inf vertices")
         tm.merge_vertices()
-        keep = tm.area_faces > 0
+        tri = tm.triangles
+        longest = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1)
+        keep = tm.area_faces > DEGENERATE * longest**2
         tm.update_faces(keep)
         if len(tm.faces) == 0:
             raise ParameterError(f"{call}: {what}: the mesh has no triangle of non-zero area "
