@@ -145,9 +145,9 @@ def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
                      else _unknown(f"contacts[{k}]", c, ["materials", "model", *names]))
     for k, b in enumerate(doc.get("boundaries", [])):
         names, bad = _params("boundary", b.get("kind"), f"boundaries[{k}]: kind")
-        base = ["kind", "material", "motion"]
-        problems += (bad + _misspelt(f"boundaries[{k}]", b, base) if bad
-                     else _unknown(f"boundaries[{k}]", b, [*base, *names]))
+        own = ["kind", "material", "motion"]
+        problems += (bad + _misspelt(f"boundaries[{k}]", b, own) if bad
+                     else _unknown(f"boundaries[{k}]", b, [*own, *names]))
         if "motion" in b:
             problems += _motion(f"boundaries[{k}]", b["motion"])
     for k, per in enumerate(doc.get("periodic", [])):

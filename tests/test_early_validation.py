@@ -358,7 +358,7 @@ step = 3
     for part in ("[simulation]: unknown key gravty", "allowed: ", "gravity",
                  "contacts[0]: unknown key restitutoin", "inlets[0]: region.box: unknown key "
                  "uper", "inlets[0]: unknown key radious", "lattice: unknown key spacin",
-                 "[run]: unknown key step = 3; allowed: steps, until"):
+                 "[run]: unknown key step = 3 (did you mean steps?); allowed: steps, until"):
         assert part in msg, msg
 
 
