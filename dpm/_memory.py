@@ -36,3 +36,40 @@ def tune_malloc() -> bool:
     except (OSError, AttributeError):  # not glibc
         return False
     return bool(mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD))
+
+
+#: bytes of state per body (position, velocity, orientation, forces, mass properties, ids,
+#: its share of the neighbour and contact lists) and per sphere element (offset, radius,
+#: owner, cell index, neighbour list rows); together 700 B per single-sphere body, the
+#: measured peak at 1e6 dense spheres being 631 B (``benchmarks/NOTES.md`` rows 23 and 25)
+BYTES_PER_BODY = 450
+BYTES_PER_ELEMENT = 250
+
+
+def physical_memory() -> int | None:
+    """Bytes of physical memory of this machine (None where the OS does not say)."""
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def _gb(n: float) -> str:
+    return f"{n / 1e9:.3g} GB"
+
+
+def check_request(call: str, n_bodies: float, n_elements: float) -> None:
+    """Refuse, before anything is allocated, a request whose state would not fit in this
+    machine's physical memory: ``n_bodies`` bodies with ``n_elements`` sphere elements in
+    all need about ``BYTES_PER_BODY`` and ``BYTES_PER_ELEMENT`` bytes each. Raises a
+    ParameterError naming the counts, the memory needed and the memory there is."""
+    from .errors import ParameterError
+
+    need = float(n_bodies) * BYTES_PER_BODY + float(n_elements) * BYTES_PER_ELEMENT
+    have = physical_memory()
+    if have is not None and need > have:
+        raise ParameterError(
+            f"{call}: {float(n_bodies):.4g} bodies ({float(n_elements):.4g} sphere "
+            f"elements) would need about {_gb(need)} of memory for their state "
+            f"({BYTES_PER_BODY} B per body, {BYTES_PER_ELEMENT} B per element); this "
+            f"machine has {_gb(have)}")

@@ -12,7 +12,9 @@ from .errors import DpmError
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from .io.scene import load_scene
+    from .scene_file import read_scene
 
+    read_scene(args.scene)  # the file, its tables and keys, before anything is built
     sim, run_kw = load_scene(args.scene)
     if args.steps is not None:
         run_kw = {"steps": args.steps}

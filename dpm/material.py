@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from .parameters import Parameter, validate
 
@@ -35,10 +36,12 @@ class Material:
                              high_open=True, doc="Poisson ratio"),
     }
 
-    def __init__(self, name: str, density: float, young: float | None = None,
-                 poisson: float | None = None) -> None:
+    def __init__(self, name: str, density: float | None = None, young: float | None = None,
+                 poisson: float | None = None, **unknown: Any) -> None:
+        # unknown keywords are taken so that a misspelt one is named in a ParameterError
+        # with the allowed ones (not Python's TypeError); density is required there too
         v = validate(f"Material({name!r})", self.parameters,
-                     {"density": density, "young": young, "poisson": poisson})
+                     {**unknown, "density": density, "young": young, "poisson": poisson})
         self.name = str(name)
         self.density = float(v["density"])
         self.young = None if v["young"] is None else float(v["young"])

@@ -3,12 +3,14 @@
 A class declares ``parameters = {name: Parameter(...)}``; :func:`validate` checks a
 keyword dictionary against it and raises one :class:`ParameterError` that lists every
 problem: unknown names (with the allowed ones), missing required values, values outside
-their range, NaN.
+their range, NaN and infinity (unless the parameter allows it), strings and booleans
+where a number is wanted, non-integers where an integer is wanted.
 """
 
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -25,7 +27,11 @@ class Parameter:
     """One scalar (or per-item array) parameter.
 
     ``low``/``high`` bound the value; ``low_open``/``high_open`` make the bound exclusive.
-    ``array`` allows a 1-D array of values (e.g. one radius per particle).
+    ``array`` allows a 1-D array of values (e.g. one radius per particle). ``allow_inf``
+    lets the value be infinite (e.g. an inlet's ``stop``: never); NaN is never allowed.
+    Numbers must be given as numbers: strings, booleans and None inside a value are refused
+    (``kind="bool"`` takes only True or False, ``kind="int"`` only integers, integral
+    floats such as ``1e5`` included).
     """
 
     default: Any = REQUIRED
@@ -37,6 +43,7 @@ class Parameter:
     doc: str = ""
     array: bool = False
     kind: str = "float"  # "float", "int", "str", "vector", "bool", "any"
+    allow_inf: bool = False
 
     def interval(self) -> str:
         lo = "(" if self.low_open or self.low == -math.inf else "["
@@ -48,19 +55,26 @@ class Parameter:
             if isinstance(value, bool | np.bool_):
                 return []
             return [f"{name}={value!r}; allowed: True or False"]
-        if self.kind in ("str", "any"):
+        if self.kind == "any":
             return []
+        if self.kind == "str":
+            if isinstance(value, str | os.PathLike):
+                return []
+            return [f"{name}={value!r} must be a string"]
+        unit = f" [{self.unit}]" if self.unit else ""
         if self.kind == "vector":
-            arr = np.asarray(value, dtype=float)
-            if arr.shape != (3,):
-                return [f"{name}={value!r} must be a 3-vector"]
-            if not np.all(np.isfinite(arr)):
-                return [f"{name}={value!r} contains NaN or inf"]
+            arr = numeric_array(value)
+            if arr is None or arr.shape != (3,):
+                return [f"{name}={value!r} must be a 3-vector of numbers{unit}"]
+            if np.any(np.isnan(arr)) or (not self.allow_inf and np.any(np.isinf(arr))):
+                return [f"{name}={value!r} contains NaN or inf; allowed: 3 finite "
+                        f"numbers{unit}"]
             return []
-        try:
-            arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            return [f"{name}={value!r} is not a number"]
+        what = "an integer" if self.kind == "int" else "a number"
+        arr = numeric_array(value)
+        if arr is None:
+            return [f"{name}={value!r} is not {what}; allowed: {what} in "
+                    f"{self.interval()}{unit}"]
         if arr.ndim > (1 if self.array else 0):
             return [f"{name} has shape {arr.shape}; allowed: a scalar"
                     + (" or a 1-D array" if self.array else "")]
@@ -69,6 +83,14 @@ class Parameter:
             return [f"{name} is empty"]
         if np.any(np.isnan(flat)):
             return [f"{name}={_show(value)} is NaN; allowed: {self.interval()}"]
+        if not self.allow_inf and np.any(np.isinf(flat)):
+            return [f"{name}={_show(value)} is not finite; allowed: a finite number in "
+                    f"{self.interval()}{unit}"]
+        if self.kind == "int" and flat.dtype.kind == "f":
+            frac = np.isfinite(flat) & (flat != np.round(flat))
+            if np.any(frac):
+                return [f"{name}={_show(value, exact=True)} is not {what}; allowed: {what} "
+                        f"in {self.interval()}"]
         bad_low = flat <= self.low if self.low_open else flat < self.low
         bad_high = flat >= self.high if self.high_open else flat > self.high
         bad = bad_low | bad_high
@@ -81,6 +103,40 @@ class Parameter:
         return []
 
 
+#: Python and numpy scalar types accepted as numbers (bool is an int subclass: refused)
+_NUMBER_TYPES = (int, float, np.integer, np.floating)
+
+
+def numeric_array(value: Any) -> np.ndarray | None:
+    """``value`` as a float array if it is made only of numbers (Python or numpy ints and
+    floats, arrays of them, nested sequences of them); None if any item is a string, a
+    boolean, None or anything else, or the nesting is ragged. Unlike ``np.asarray(value,
+    float)``, ``"1e-3"`` and ``True`` are not numbers here."""
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "iuf":
+            return value.astype(float, copy=False)
+        if value.dtype.kind != "O":
+            return None
+    elif isinstance(value, str | bytes | bool | np.bool_) or value is None:
+        return None
+    elif isinstance(value, _NUMBER_TYPES):
+        return np.asarray(value, dtype=float)
+    try:
+        obj = np.array(value, dtype=object)
+    except (TypeError, ValueError):
+        return None
+    if obj.dtype != object:
+        return None
+    items = obj.ravel()
+    for t in set(map(type, items)):
+        if not issubclass(t, _NUMBER_TYPES) or issubclass(t, bool | np.bool_):
+            return None
+    try:
+        return obj.astype(float)
+    except (TypeError, ValueError, OverflowError):
+        return None
+
+
 def _fmt(x: float) -> str:
     if x == math.inf:
         return "inf"
@@ -89,9 +145,9 @@ def _fmt(x: float) -> str:
     return f"{x:g}"
 
 
-def _show(value: Any) -> str:
+def _show(value: Any, exact: bool = False) -> str:
     if isinstance(value, float | int | np.floating | np.integer):
-        return f"{float(value):g}"
+        return repr(float(value)) if exact else f"{float(value):g}"
     if np.ndim(value) == 0:
         try:
             return f"{float(value):g}"

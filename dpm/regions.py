@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .errors import ParameterError
+from .parameters import Parameter, validate
 
 
 class Region:
@@ -24,11 +25,19 @@ class Region:
     def volume(self) -> float:
         raise NotImplementedError
 
+    def holds(self, radius: float) -> bool:
+        """Whether a ball of ``radius`` fits inside (True where a subclass cannot tell)."""
+        return True
+
 
 class BoxRegion(Region):
     """Axis-aligned box ``lower`` <= x <= ``upper``."""
 
+    parameters = {"lower": Parameter(kind="vector", unit="m"),
+                  "upper": Parameter(kind="vector", unit="m")}
+
     def __init__(self, lower: Sequence[float], upper: Sequence[float]) -> None:
+        validate("BoxRegion()", self.parameters, {"lower": lower, "upper": upper})
         self.lower = np.asarray(lower, float).reshape(3)
         self.upper = np.asarray(upper, float).reshape(3)
         if np.any(self.upper <= self.lower):
@@ -49,12 +58,26 @@ class BoxRegion(Region):
     def volume(self):
         return float(np.prod(self.upper - self.lower))
 
+    def holds(self, radius):
+        return bool(np.all(self.upper - self.lower >= 2.0 * radius))
+
+    def __repr__(self) -> str:
+        return (f"BoxRegion(lower={tuple(float(x) for x in self.lower)}, "
+                f"upper={tuple(float(x) for x in self.upper)})")
+
 
 class CylinderRegion(Region):
     """Cylinder from ``start`` along ``axis`` over ``length`` with ``radius``."""
 
+    parameters = {"start": Parameter(kind="vector", unit="m"),
+                  "axis": Parameter(kind="vector"),
+                  "length": Parameter(low=0.0, low_open=True, unit="m"),
+                  "radius": Parameter(low=0.0, low_open=True, unit="m")}
+
     def __init__(self, start: Sequence[float], axis: Sequence[float], length: float,
                  radius: float) -> None:
+        validate("CylinderRegion()", self.parameters,
+                 {"start": start, "axis": axis, "length": length, "radius": radius})
         self.start = np.asarray(start, float).reshape(3)
         a = np.asarray(axis, float).reshape(3)
         if np.linalg.norm(a) == 0 or length <= 0 or radius <= 0:
@@ -86,3 +109,11 @@ class CylinderRegion(Region):
     @property
     def volume(self):
         return float(np.pi * self.radius**2 * self.length)
+
+    def holds(self, radius):
+        return bool(self.radius >= radius and self.length >= 2.0 * radius)
+
+    def __repr__(self) -> str:
+        return (f"CylinderRegion(start={tuple(float(x) for x in self.start)}, "
+                f"axis={tuple(float(x) for x in self.axis)}, length={self.length:g}, "
+                f"radius={self.radius:g})")

@@ -44,27 +44,48 @@ def pairs_that_can_meet(sim: Any) -> tuple[list[tuple[int, int]], list[tuple[int
     return particle, wall
 
 
-def inlet_problems(sim: Any) -> list[str]:
-    """Each inlet's shapes resolved now (a misspelt name or parameter is found before
-    step 1, not at the inlet's first insertion): every shape of the mix is built once
-    with its parameters at the middle of their ranges."""
-    from .population import inlet_shape
+#: points of an inlet's region tried against the boundaries
+REGION_SAMPLES = 2000
 
+
+def inlet_problems(sim: Any) -> list[str]:
+    """Inlets that cannot place a single particle: their shapes are resolved (names,
+    parameters, ranges) when the inlet is made (:class:`dpm.flow.Inlet`); here each
+    region is sampled (fixed seed) with the inlet's smallest bounding radius and refused
+    when it has no volume, cannot hold that ball, or no sample point lies inside every
+    boundary (``bd.outside``, as for the particles)."""
     problems = []
+    rng = np.random.default_rng(12345)
     for n, inlet in enumerate(sim.inlets):
-        for spec in inlet.shapes:
-            params = {}
-            for key, v in spec.items():
-                if key in ("shape", "fraction"):
-                    continue
-                if isinstance(v, tuple | list) and len(v) == 2 and not isinstance(v[0], str):
-                    params[key] = 0.5 * (float(v[0]) + float(v[1]))
-                else:
-                    params[key] = v
-            try:
-                inlet_shape(sim, spec.get("shape", "sphere"), params)
-            except DpmError as exc:
-                problems.append(f"inlet {n}: {exc}")
+        region = inlet.region
+        try:
+            r = inlet.smallest_radius()
+        except DpmError as exc:
+            problems.append(f"inlet {n}: {exc}")
+            continue
+        try:
+            volume = float(region.volume)
+        except NotImplementedError:
+            volume = None
+        if volume is not None and not volume > 0:
+            problems.append(f"inlet {n}: its region {region!r} has no volume")
+            continue
+        if not region.holds(r):
+            problems.append(f"inlet {n}: its region {region!r} is too small for the smallest "
+                            f"particle it inserts (bounding radius {r:g} m)")
+            continue
+        if not sim.boundaries:
+            continue
+        pts = np.asarray(region.sample(rng, REGION_SAMPLES, r), float)
+        radii = np.full(len(pts), r)
+        ok = np.ones(len(pts), bool)
+        for bd in sim.boundaries:
+            ok &= ~np.asarray(bd.outside(pts, radii), bool)
+        if not np.any(ok):
+            names = ", ".join(f"{k} ({bd.name})" for k, bd in enumerate(sim.boundaries))
+            problems.append(f"inlet {n}: no point of its region {region!r} (of "
+                            f"{REGION_SAMPLES} tried, bounding radius {r:g} m) lies inside "
+                            f"every boundary ({names}): it could never insert a particle")
     return problems
 
 
@@ -105,8 +126,11 @@ def validate_scene(sim: Any) -> None:
         for k, bd in enumerate(sim.boundaries):
             out = bd.outside(b.position, b.radius)
             if np.any(out):
+                side = getattr(bd, "side", None)
+                hint = (f" (particles belong {side} this closed mesh; set side= 'inside', "
+                        "'outside' or 'both' to say otherwise)" if side else "")
                 problems.append(f"{int(out.sum())} particle(s) lie outside boundary {k} "
-                                f"({bd.name}): id(s) {few(b.id[out])}")
+                                f"({bd.name}): id(s) {few(b.id[out])}{hint}")
     if problems:
         raise SceneError("scene check before the first step:\n  " + "\n  ".join(problems))
 

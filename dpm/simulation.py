@@ -105,7 +105,7 @@ class Simulation:
         "max_overlap": Parameter(default=0.5, low=0.0, high=2.0, low_open=True),
         "overlap_tolerance": Parameter(default=0.01, low=0.0),
         "threads": Parameter(default=None, low=1, high=numba.config.NUMBA_NUM_THREADS,
-                             doc="number of threads"),
+                             kind="int", doc="number of threads"),
         "sphere_orientation": Parameter(default=True, kind="bool",
                                         doc="track the orientation of single spheres"),
     }
@@ -679,7 +679,7 @@ class Simulation:
         if (steps is None) == (until is None):
             raise ParameterError("sim.run(): give exactly one of steps or until")
         if steps is not None:
-            validate("sim.run()", {"steps": Parameter(low=0)}, {"steps": steps})
+            validate("sim.run()", {"steps": Parameter(low=0, kind="int")}, {"steps": steps})
         else:
             validate("sim.run()", {"until": Parameter(low=self.time, unit="s")},
                      {"until": until})
@@ -958,10 +958,20 @@ class Simulation:
 
 
 def _rows(call: str, name: str, value: Any, width: int, n: int | None = None) -> np.ndarray:
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{call}: {name} is not numeric") from None
+    from .parameters import numeric_array
+
+    arr = numeric_array(value)
+    if arr is None:
+        shown = repr(value)  # the start only: a huge array's would fill the screen
+        shown = shown if len(shown) <= 80 else shown[:77] + "..."
+        raise ParameterError(f"{call}: {name}={shown} must be numbers in rows of {width} "
+                             "(no strings, booleans or None)")
+    if name == "positions" and arr.ndim == 2:  # before the copy: at least one element each
+        from ._memory import check_request
+
+        check_request(f"{call}: positions:", len(arr), len(arr))
+    if arr is value:  # a float array given: a copy, as for any other input
+        arr = arr.copy()
     if arr.ndim == 1 and arr.size == width and n in (None, 1):
         arr = arr[None]
     if arr.ndim != 2 or arr.shape[1] != width or (n is not None and len(arr) != n):

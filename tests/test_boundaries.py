@@ -907,7 +907,9 @@ def test_candidate_list_matches_brute_force(moved):
     ico = trimesh.creation.icosphere(subdivisions=2, radius=0.012)
     motion = (dpm.Tumbling(omega=30.0, alpha=0.3, beta=0.2, u=0.003, e=0.002,
                            eccentricity=0.001) if moved else None)
-    sim.add_boundary("mesh", material=w, vertices=ico.vertices, faces=ico.faces, motion=motion)
+    # spheres on both sides of the closed icosphere: no side to check
+    sim.add_boundary("mesh", material=w, vertices=ico.vertices, faces=ico.faces, motion=motion,
+                     side="both")
     sim.add_boundary("tube", material=w, start=(0.05, 0, 0), axis=(1, 1, 0), length=0.02,
                      radius=0.008, caps="end")
     sim.add_boundary("bend", material=w, center=(-0.05, 0, 0), bend_radius=0.02,

@@ -3,16 +3,21 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import ParameterError
 from ..kernels.boundary_geometry import TRIANGLE
-from ..parameters import Parameter
+from ..parameters import Parameter, numeric_array
 from .base import Boundary, Primitives
 
 #: dihedral angle [rad] below which an edge counts as flat (inactive)
 FLAT_ANGLE = 1e-6
+#: a face whose area is at most this times its longest edge squared is degenerate (its
+#: vertices on a line up to rounding, float32 rounding included: STL stores float32; a
+#: height under 2e-6 of its longest edge) and dropped
+DEGENERATE = 1e-6
 
 
 class Mesh(Boundary):
@@ -27,7 +32,18 @@ class Mesh(Boundary):
     inactive, so a sphere rolling over a flat meshed floor feels exactly the plane force.
     Edges of one face only (open borders) and convex edges are active. Triangles are
     found through a uniform grid in the mesh's frame, so the search cost per sphere does not
-    grow with the triangle count. Degenerate (zero-area) faces are dropped.
+    grow with the triangle count. Degenerate faces (zero area, up to ``DEGENERATE``) are
+    dropped; a mesh with
+    no face of non-zero area left, a missing or unreadable file, or non-finite vertices is
+    refused.
+
+    ``side`` says where the particles belong, checked before the first step (particles
+    on the wrong side are refused, as for the other boundaries): ``"auto"`` (default) for
+    a closed (watertight) mesh the side its face normals point to, which is the side the
+    contact treatment of its edges assumes (outward normals, positive volume: an obstacle,
+    particles outside; inward normals: a container, particles inside), and anywhere for an
+    open mesh; ``"inside"`` or ``"outside"`` of a closed mesh; ``"both"`` no check.
+    Inside is decided by the generalised winding number of the triangles at each centre.
     """
 
     name = "mesh"
@@ -38,6 +54,8 @@ class Mesh(Boundary):
         "scale": Parameter(default=1.0, low=0.0, low_open=True),
         "translate": Parameter(default=(0.0, 0.0, 0.0), kind="vector", unit="m"),
         "thickness": Parameter(default=0.0, low=0.0, unit="m"),
+        "side": Parameter(default="auto", kind="str",
+                          doc="where the particles belong: auto, inside, outside, both"),
     }
 
     def __init__(self, material, call=None, **params):
@@ -48,33 +66,63 @@ class Mesh(Boundary):
 
         if (p["file"] is None) == (p["vertices"] is None):
             raise ParameterError(f"{call}: give either file or vertices and faces")
+        if p["side"] not in SIDES:
+            raise ParameterError(f"{call}: side={p['side']!r}; allowed: {', '.join(SIDES)}")
         if p["file"] is not None:
-            try:
-                tm = trimesh.load(str(p["file"]), force="mesh")
-            except Exception as exc:  # trimesh raises many kinds
-                raise ParameterError(f"{call}: file={p['file']!r} could not be read as a "
-                                     f"mesh: {exc}") from exc
+            tm = load_mesh(call, p["file"])
+            what = f"file={str(p['file'])!r}"
         else:
-            v = np.asarray(p["vertices"], float)
-            f = np.asarray(p["faces"], np.int64) if p["faces"] is not None else None
-            if v.ndim != 2 or v.shape[1] != 3 or f is None or f.ndim != 2 or f.shape[1] != 3:
+            v = numeric_array(p["vertices"])
+            f = numeric_array(p["faces"]) if p["faces"] is not None else None
+            if v is None or v.ndim != 2 or v.shape[1] != 3 or f is None or f.ndim != 2 \
+                    or f.shape[1] != 3:
                 raise ParameterError(f"{call}: vertices must be (n, 3) and faces (m, 3) "
-                                     f"(got {v.shape} and "
-                                     f"{None if f is None else f.shape})")
+                                     f"numbers (got {_shape(p['vertices'])} and "
+                                     f"{_shape(p['faces'])})")
+            if not np.all(np.isfinite(v)):
+                raise ParameterError(f"{call}: vertices contain NaN or inf")
+            if np.any(f != np.round(f)):
+                raise ParameterError(f"{call}: faces must be integer vertex indices")
+            f = f.astype(np.int64)
             if f.size and (f.min() < 0 or f.max() >= len(v)):
                 raise ParameterError(f"{call}: faces index vertices 0..{len(v) - 1}; got "
                                      f"{f.min()}..{f.max()}")
             tm = trimesh.Trimesh(v, f, process=False)
+            what = "vertices/faces"
+        if not np.all(np.isfinite(tm.vertices)):
+            raise ParameterError(f"{call}: {what}: the mesh has NaN or inf vertices")
         tm.merge_vertices()
-        keep = tm.area_faces > 0
+        tri = tm.triangles
+        longest = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1)
+        keep = tm.area_faces > DEGENERATE * longest**2
         tm.update_faces(keep)
         if len(tm.faces) == 0:
-            raise ParameterError(f"{call}: the mesh has no triangle of non-zero area")
+            raise ParameterError(f"{call}: {what}: the mesh has no triangle of non-zero area "
+                                 "(degenerate: zero faces or zero area)")
+        if p["side"] in ("inside", "outside") and not tm.is_watertight:
+            raise ParameterError(f"{call}: side={p['side']!r} needs a closed (watertight) "
+                                 "mesh; this one has open edges (use side='both')")
         self.trimesh = tm
         self.vertices = np.asarray(tm.vertices, float) * float(p["scale"]) + np.asarray(
             p["translate"], float)
         self.faces = np.asarray(tm.faces, np.int64)
         self.h = 0.5 * float(p["thickness"])
+        #: where the particles belong ("inside", "outside" or None: anywhere)
+        self.side = p["side"]
+        if self.side == "auto":
+            self.side = (None if not tm.is_watertight
+                         else "outside" if tm.volume > 0 else "inside")
+        elif self.side == "both":
+            self.side = None
+
+    def outside(self, position: np.ndarray, radius: np.ndarray) -> np.ndarray:
+        """Particles whose centre lies on the wrong side of a closed mesh (see ``side``);
+        none for an open mesh or ``side="both"``."""
+        position = np.asarray(position, float)
+        if self.side is None or len(position) == 0:
+            return np.zeros(len(position), bool)
+        inside = contains(self.vertices, self.faces, position)
+        return ~inside if self.side == "inside" else inside
 
     def volume(self) -> float:
         """Enclosed volume [m3] of a watertight mesh; else the surface area times the
@@ -90,6 +138,64 @@ class Mesh(Boundary):
 
     def primitives(self) -> Primitives:
         return triangle_primitives(self.vertices, self.faces, self.h, self.feature_flags())
+
+
+SIDES = ("auto", "inside", "outside", "both")
+
+
+def _shape(value) -> str:
+    try:
+        return str(np.shape(value))
+    except (TypeError, ValueError):
+        return type(value).__name__
+
+
+def load_mesh(call: str, file):
+    """Read ``file`` with trimesh as one mesh; ParameterError naming the file and the
+    reason when it is missing, unreadable or holds no triangles."""
+    import trimesh
+
+    path = Path(str(file))
+    if not path.is_file():
+        raise ParameterError(f"{call}: file={str(file)!r} does not exist"
+                             + (" (it is a directory)" if path.is_dir() else ""))
+    try:
+        tm = trimesh.load(str(path), force="mesh")
+    except Exception as exc:  # trimesh raises many kinds
+        raise ParameterError(f"{call}: file={str(file)!r} could not be read as a mesh: "
+                             f"{type(exc).__name__}: {exc}") from None
+    if not isinstance(tm, trimesh.Trimesh) or len(tm.faces) == 0:
+        raise ParameterError(f"{call}: file={str(file)!r} holds no triangles (empty or not "
+                             "a mesh file trimesh reads: STL, OBJ, PLY, ...)")
+    return tm
+
+
+#: points per block of the winding-number sum (a block's work is points x triangles)
+CONTAINS_BLOCK = 1 << 20
+
+
+def contains(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Mask of the points inside the closed triangle mesh (generalised winding number:
+    the solid angles of the triangles seen from the point sum to +-4 pi inside, 0 outside;
+    Van Oosterom and Strackee 1983, Jacobson et al. 2013). Only points in the mesh's
+    bounding box are summed, in blocks."""
+    points = np.asarray(points, float)
+    out = np.zeros(len(points), bool)
+    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+    cand = np.flatnonzero(np.all((points >= lo) & (points <= hi), axis=1))
+    tri = vertices[faces]  # (m, 3, 3)
+    step = max(1, CONTAINS_BLOCK // max(1, len(faces)))
+    for s in range(0, len(cand), step):
+        idx = cand[s:s + step]
+        d = tri[None] - points[idx][:, None, None, :]  # (k, m, 3, 3)
+        a, b, c = d[:, :, 0], d[:, :, 1], d[:, :, 2]
+        la, lb, lc = (np.linalg.norm(x, axis=2) for x in (a, b, c))
+        det = np.einsum("kmj,kmj->km", a, np.cross(b, c))
+        den = (la * lb * lc + np.einsum("kmj,kmj->km", a, b) * lc
+               + np.einsum("kmj,kmj->km", b, c) * la + np.einsum("kmj,kmj->km", c, a) * lb)
+        w = np.sum(np.arctan2(det, den), axis=1) / (2.0 * np.pi)
+        out[idx] = np.abs(w) > 0.5
+    return out
 
 
 def feature_flags(tm, faces: np.ndarray, n_vertices: int) -> np.ndarray:

@@ -1,0 +1,201 @@
+"""A TOML scene file read and checked as a whole before anything is built.
+
+:func:`read_scene` returns the parsed document of a scene file (layout in
+:mod:`dpm.io.scene`) after checking, per table, its form (``[simulation]``, ``[output]``,
+``[run]`` single tables; ``[materials.NAME]`` tables of tables; ``[[contacts]]``,
+``[[boundaries]]``, ``[[particles]]``, ``[[periodic]]``, ``[[inlets]]``, ``[[outlets]]``
+arrays of tables) and its keys against the parameters of the call it mirrors. Every
+problem found is listed in one :class:`~dpm.errors.ParameterError`, each unknown key with
+the keys allowed in that table. Values are checked by the calls themselves when the scene
+is built.
+"""
+
+from __future__ import annotations
+
+import difflib
+import tomllib
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from .errors import DpmError, ParameterError
+
+SINGLE = ("simulation", "output", "run")
+ARRAYS = ("contacts", "boundaries", "particles", "periodic", "inlets", "outlets")
+TABLES = ("materials",)
+#: keys a [[particles]] table takes besides its shape's parameters
+PARTICLE_KEYS = ("shape", "material", "csv", "lattice", "positions", "velocities",
+                 "angular_velocities", "orientations")
+MOTIONS = {"translation": "Translation", "rotation": "Rotation", "oscillation": "Oscillation",
+           "triangular_oscillation": "TriangularOscillation", "tumbling": "Tumbling"}
+
+
+def read_scene(path: str | Path) -> dict[str, Any]:
+    """Parse the scene file at ``path`` and check its tables and keys; return the document.
+
+    Raises ParameterError for a missing or unreadable file, invalid TOML, a table of the
+    wrong form, and unknown keys (all of them, named per table with the allowed ones).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ParameterError(f"{path}: the scene file does not exist"
+                             + (" (it is a directory)" if path.is_dir() else ""))
+    try:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"{path}: not valid TOML: {exc}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParameterError(f"{path}: the scene file could not be read: {exc}") from None
+    problems = scene_problems(doc, path.parent)
+    if problems:
+        raise ParameterError("\n".join(f"{path}: {m}" for m in problems))
+    return doc
+
+
+def _unknown(where: str, table: dict, allowed: Iterable[str]) -> list[str]:
+    allowed = sorted(set(allowed))
+    out = []
+    for k in table:
+        if k not in allowed:
+            close = difflib.get_close_matches(k, allowed, n=1)
+            hint = f" (did you mean {close[0]}?)" if close else ""
+            out.append(f"{where}: unknown key {k} = {table[k]!r}{hint}; allowed: "
+                       f"{', '.join(allowed)}")
+    return out
+
+
+def _misspelt(where: str, table: dict, base: Iterable[str]) -> list[str]:
+    """Keys close to one of ``base`` but not it (a misspelt kind, shape or model key,
+    when the rest of the table cannot be checked)."""
+    base = list(base)
+    return [f"{where}: unknown key {k} = {table[k]!r} (did you mean {close[0]}?)"
+            for k in table if k not in base
+            for close in [difflib.get_close_matches(k, base, n=1)] if close]
+
+
+def _params(kind: str, name: Any, where: str) -> tuple[list[str], list[str]]:
+    """(parameter names, problems) of the registered ``kind`` called ``name``."""
+    from .plugins import registry
+
+    if not isinstance(name, str):
+        return [], [f"{where}: {name!r} must be a registered {kind.replace('_', ' ')} name"]
+    try:
+        cls = registry().lookup(kind, name, where)
+    except DpmError as exc:
+        return [], [str(exc)]
+    return list(getattr(cls, "parameters", {})), []
+
+
+def _region(where: str, spec: Any) -> list[str]:
+    from .regions import BoxRegion, CylinderRegion
+
+    kinds = {"box": BoxRegion, "cylinder": CylinderRegion}
+    if not isinstance(spec, dict) or len(spec) != 1 or next(iter(spec)) not in kinds:
+        return [f"{where}: region = {spec!r} must be {{ box = {{...}} }} or "
+                "{ cylinder = {...} }"]
+    kind, kw = next(iter(spec.items()))
+    if not isinstance(kw, dict):
+        return [f"{where}: region.{kind} = {kw!r} must be a table"]
+    return _unknown(f"{where}: region.{kind}", kw, kinds[kind].parameters)
+
+
+def _motion(where: str, spec: Any) -> list[str]:
+    from . import motion as mo
+
+    if isinstance(spec, list):
+        return [m for k, s in enumerate(spec) for m in _motion(f"{where}[{k}]", s)]
+    if not isinstance(spec, dict) or spec.get("type") not in MOTIONS:
+        return [f"{where}: motion = {spec!r} needs type = one of {', '.join(MOTIONS)}"]
+    cls = getattr(mo, MOTIONS[spec["type"]])
+    return _unknown(f"{where}: motion", spec, ["type", *cls.parameters])
+
+
+def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
+    """Every problem of form and keys in a parsed scene document (empty: none)."""
+    from .flow import Inlet
+    from .material import Material
+    from .scene_tools import _LATTICE
+    from .simulation import Simulation
+
+    problems = _unknown("the file", doc, [*SINGLE, *ARRAYS, *TABLES])
+    for name in SINGLE:
+        if name in doc and not isinstance(doc[name], dict):
+            problems.append(f"{name} must be a table: write [{name}]")
+    for name in ARRAYS:
+        if name in doc and not (isinstance(doc[name], list)
+                                and all(isinstance(t, dict) for t in doc[name])):
+            problems.append(f"{name} must be an array of tables: write [[{name}]] (one per "
+                            "entry)")
+    if "materials" in doc and not (isinstance(doc["materials"], dict) and all(
+            isinstance(t, dict) for t in doc["materials"].values())):
+        problems.append("materials must be tables: write [materials.NAME] (one per material)")
+    if problems:
+        return problems  # the forms are wrong: the keys below cannot be read
+    if "simulation" not in doc:
+        problems.append("the [simulation] table (with dt) is required")
+    else:
+        problems += _unknown("[simulation]", doc["simulation"],
+                             [*Simulation.parameters, "device"])
+    for name, kw in doc.get("materials", {}).items():
+        problems += _unknown(f"[materials.{name}]", kw, Material.parameters)
+    for k, c in enumerate(doc.get("contacts", [])):
+        names, bad = _params("impact_model", c.get("model", "hertz_mindlin"),
+                             f"contacts[{k}]: model")
+        problems += (bad + _misspelt(f"contacts[{k}]", c, ["materials", "model"]) if bad
+                     else _unknown(f"contacts[{k}]", c, ["materials", "model", *names]))
+    for k, b in enumerate(doc.get("boundaries", [])):
+        names, bad = _params("boundary", b.get("kind"), f"boundaries[{k}]: kind")
+        own = ["kind", "material", "motion"]
+        problems += (bad + _misspelt(f"boundaries[{k}]", b, own) if bad
+                     else _unknown(f"boundaries[{k}]", b, [*own, *names]))
+        if "motion" in b:
+            problems += _motion(f"boundaries[{k}]", b["motion"])
+    for k, per in enumerate(doc.get("periodic", [])):
+        problems += _unknown(f"periodic[{k}]", per, ["axis", "lower", "upper"])
+    for k, spec in enumerate(doc.get("inlets", [])):
+        where = f"inlets[{k}]"
+        problems += _region(where, spec.get("region"))
+        own = ["material", "region", "shapes", *Inlet.parameters]
+        if "shapes" in spec:
+            problems += _unknown(where, spec, own)
+            mix = spec["shapes"]
+            if not (isinstance(mix, list) and all(isinstance(s, dict) for s in mix)):
+                problems.append(f"{where}: shapes = {mix!r} must be a list of tables "
+                                '{ shape = "name", fraction = f, ... }')
+                continue
+            for j, s in enumerate(mix):
+                names, bad = _params("shape", s.get("shape", "sphere"),
+                                     f"{where}: shapes[{j}]: shape")
+                problems += bad or _unknown(f"{where}: shapes[{j}]", s,
+                                            ["shape", "fraction", *names])
+        else:
+            names, bad = _params("shape", spec.get("shape", "sphere"), f"{where}: shape")
+            problems += bad or _unknown(where, spec, [*own, *names])
+    for k, spec in enumerate(doc.get("outlets", [])):
+        problems += _region(f"outlets[{k}]", spec.get("region"))
+        problems += _unknown(f"outlets[{k}]", spec, ["region", "remove", "every", "name"])
+    for k, p in enumerate(doc.get("particles", [])):
+        where = f"particles[{k}]"
+        names, bad = _params("shape", p.get("shape", "sphere"), f"{where}: shape")
+        problems += (bad + _misspelt(where, p, PARTICLE_KEYS) if bad
+                     else _unknown(where, p, [*PARTICLE_KEYS, *names]))
+        sources = [s for s in ("csv", "lattice", "positions") if s in p]
+        if len(sources) != 1:
+            problems.append(f"{where}: give exactly one of csv, lattice, positions (got "
+                            f"{', '.join(sources) or 'none'})")
+        if isinstance(p.get("lattice"), dict):
+            problems += _unknown(f"{where}: lattice", p["lattice"], _LATTICE)
+        elif "lattice" in p:
+            problems.append(f"{where}: lattice = {p['lattice']!r} must be a table "
+                            "{ lower = [...], upper = [...], spacing = ... }")
+        if "csv" in p:
+            if not isinstance(p["csv"], str):
+                problems.append(f"{where}: csv = {p['csv']!r} must be a file name")
+            elif base is not None and not (base / p["csv"]).is_file():
+                problems.append(f"{where}: csv = {p['csv']!r}: no such file "
+                                f"({base / p['csv']})")
+    if "output" in doc:
+        problems += _unknown("[output]", doc["output"], ["path", "every", "every_steps"])
+    if "run" in doc:
+        problems += _unknown("[run]", doc["run"], ["steps", "until"])
+    return problems
