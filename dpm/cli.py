@@ -6,22 +6,34 @@ import argparse
 import inspect
 import sys
 import time
+from pathlib import Path
 
 from .errors import DpmError
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from .io.scene import load_scene
-    from .scene_file import read_scene
 
-    read_scene(args.scene)  # the file, its tables and keys, before anything is built
-    sim, run_kw = load_scene(args.scene)
+    if args.restart is not None:
+        # the scene as the file describes it, to check that the checkpoint is of it
+        scene, run_kw = load_scene(args.scene, output=False)
+        from .checkpoint import restart
+
+        sim = restart(args.restart, scene=scene)
+        print(f"restarted from step {sim.step_count} (t = {sim.time:.6g} s)")
+    else:
+        sim, run_kw = load_scene(args.scene, overwrite=True if args.overwrite else None)
     if args.steps is not None:
         run_kw = {"steps": args.steps}
     elif args.until is not None:
         run_kw = {"until": args.until}
     if not run_kw:
         raise DpmError(f"{args.scene}: no [run] table and no --steps/--until given")
+    if args.restart is not None and "steps" in run_kw:  # steps count from the start
+        run_kw = {"steps": max(0, int(run_kw["steps"]) - sim.step_count)}
+    if args.checkpoint_every is not None:
+        base = args.checkpoint or str(Path(args.scene).with_suffix(".ckpt.h5").name)
+        sim.checkpoint_every(base, every=args.checkpoint_every)
     t0 = time.perf_counter()
     try:
         sim.run(**run_kw, progress=None if not args.no_progress else False)
@@ -89,6 +101,15 @@ def main(argv: list[str] | None = None) -> int:
     g.add_argument("--steps", type=int, help="override the scene's [run]")
     g.add_argument("--until", type=float, help="override the scene's [run] (seconds)")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    r.add_argument("--overwrite", action="store_true",
+                   help="replace an existing output file (it is kept otherwise)")
+    r.add_argument("--restart", metavar="CHECKPOINT", default=None,
+                   help="go on from a checkpoint of this scene (a file, or the base name of "
+                   "numbered ones: the newest)")
+    r.add_argument("--checkpoint-every", type=float, default=None, metavar="SECONDS",
+                   help="write checkpoints every SECONDS of simulated time")
+    r.add_argument("--checkpoint", default=None, metavar="PATH",
+                   help="base name of the checkpoints (default: SCENE.ckpt.h5)")
     r.set_defaults(func=_cmd_run)
     sub.add_parser("plugins", help="list registered shapes, boundaries, impact models, "
                    "integrators").set_defaults(func=_cmd_plugins)

@@ -40,6 +40,10 @@ def append_bodies(sim: Any, shape: Shape, imat: int, density: float, pos: np.nda
     """Build ``len(pos)`` bodies of ``shape`` and append them with their elements; return
     their new ids (a copy: the bodies keep the array itself)."""
     n = len(pos)
+    from ._memory import check_request
+
+    per_body = int(shape.build(1, density).element_count[0]) if n > 1000 else 1
+    check_request(f"sim.add_particles({type(shape).__name__})", n, n * per_body)
     batch = shape.build(n, density)
     quat = quat_multiply(quat, np.asarray(batch.principal_rotation, float))
     first = len(sim.bodies)

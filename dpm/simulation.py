@@ -110,17 +110,18 @@ class Simulation:
                                         doc="track the orientation of single spheres"),
     }
 
-    def __init__(self, dt: float | str, gravity: Sequence[float] = (0.0, 0.0, 0.0),
+    def __init__(self, dt: float | str | None = None, gravity: Sequence[float] = (0.0, 0.0, 0.0),
                  integrator: str = "velocity_verlet", skin: float | None = None,
                  dt_check: str = "refuse", max_overlap: float = 0.5,
                  overlap_tolerance: float = 0.01, threads: int | None = None,
-                 sphere_orientation: bool = True, device: str | Backend = "cpu") -> None:
+                 sphere_orientation: bool = True, device: str | Backend = "cpu",
+                 **unknown: Any) -> None:
         self._auto_dt = isinstance(dt, str) and dt == "auto"
         v = validate("Simulation()", self.parameters, dict(
             dt=1.0 if self._auto_dt else dt, gravity=gravity, integrator=integrator,
             skin=skin, dt_check=dt_check,
             max_overlap=max_overlap, overlap_tolerance=overlap_tolerance, threads=threads,
-            sphere_orientation=sphere_orientation))
+            sphere_orientation=sphere_orientation, **unknown))
         #: track the orientation of single-sphere bodies (see the class docstring)
         self.sphere_orientation = bool(v["sphere_orientation"])
         if v["dt_check"] not in DT_CHECKS:
@@ -653,7 +654,7 @@ class Simulation:
 
     # ----------------------------------------------------------------- running
     def run(self, steps: int | None = None, until: float | None = None,
-            progress: bool | None = None) -> None:
+            progress: bool | None = None, **unknown: Any) -> None:
         """Advance ``steps`` steps, or until simulated time ``until`` [s].
 
         Shows a progress bar (simulated time, steps/s, ETA) when ``progress`` is True, or
@@ -676,6 +677,9 @@ class Simulation:
         insert) when its interval is due; an output frame (then ``dpm_on_output``) when
         due. Calls are as long as these events allow, aiming at ~0.1 s each.
         """
+        if unknown:
+            raise ParameterError(f"sim.run(): unknown parameter(s) {', '.join(unknown)}; "
+                                 "allowed: steps, until, progress")
         if (steps is None) == (until is None):
             raise ParameterError("sim.run(): give exactly one of steps or until")
         if steps is not None:

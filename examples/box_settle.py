@@ -65,7 +65,7 @@ def main(argv: list[str] | None = None) -> None:
     lat = a.lattice or ((10, 10, 10) if a.quick else (20, 20, 25))
     steps = a.steps or (5000 if a.quick else 20000)
     sim = build(initial_packing(*lat))
-    sim.output(a.output, every=a.every)
+    sim.output(a.output, every=a.every, overwrite=True)  # (the example's own file)
     t0 = time.perf_counter()
     sim.run(steps=steps)
     sim.close()

@@ -73,7 +73,7 @@ def main(argv: list[str] | None = None) -> None:
     args = p.parse_args(argv)
     until = 0.4 if args.quick else 2.0
     sim = build()
-    sim.output(args.output, every=0.02)
+    sim.output(args.output, every=0.02, overwrite=True)  # (the example's own file)
     print(f"{len(sim.bodies)} beads in a {2 * R_DRUM * 1e3:.0f} mm drum at {RPM:g} rpm; "
           f"dt = {sim.dt:g} s")
     t0 = time.perf_counter()

@@ -78,7 +78,7 @@ def main(argv: list[str] | None = None) -> None:
     args = p.parse_args(argv)
     until = 0.8 if args.quick else 3.0
     sim = build()
-    sim.output(args.output, every=0.05)
+    sim.output(args.output, every=0.05, overwrite=True)  # (the example's own file)
     t0 = time.perf_counter()
     sim.run(until=until)
     wall = time.perf_counter() - t0

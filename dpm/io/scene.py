@@ -60,7 +60,6 @@ Layout (every table mirrors a call; keys are the call's keyword arguments)::
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -100,13 +99,21 @@ def _region(where: str, spec: Any) -> Any:
     return kinds[kind](**kw)
 
 
-def load_scene(path: str | Path) -> tuple[Simulation, dict[str, Any]]:
-    """Build the Simulation a TOML scene describes; return it and the ``[run]`` arguments."""
+def load_scene(path: str | Path, output: bool = True,
+               overwrite: bool | None = None) -> tuple[Simulation, dict[str, Any]]:
+    """Build the Simulation a TOML scene describes; return it and the ``[run]`` arguments.
+
+    The file, its tables and their keys are checked first (:func:`dpm.scene_file.read_scene`).
+    ``output=False`` leaves the ``[output]`` table out (a restart goes on writing the file
+    of the checkpoint); ``overwrite`` (when not None) overrides its ``overwrite`` key."""
+    from ..scene_file import read_scene
+
     path = Path(path)
-    try:
-        doc = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"{path}: not valid TOML: {exc}") from None
+    doc = read_scene(path)
+    if not output:
+        doc.pop("output", None)
+    elif overwrite is not None and "output" in doc:
+        doc["output"] = dict(doc["output"], overwrite=bool(overwrite))
     unknown = sorted(set(doc) - _TOP)
     if unknown:
         raise ParameterError(f"{path}: unknown table(s) {unknown}; allowed: {sorted(_TOP)}")
