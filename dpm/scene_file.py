@@ -43,13 +43,27 @@ def read_scene(path: str | Path) -> dict[str, Any]:
     try:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"{path}: not valid TOML: {exc}") from None
+        raise ParameterError(f"{path}: not valid TOML: {exc}{_line_of(path, exc)}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ParameterError(f"{path}: the scene file could not be read: {exc}") from None
     problems = scene_problems(doc, path.parent)
     if problems:
         raise ParameterError("\n".join(f"{path}: {m}" for m in problems))
     return doc
+
+
+def _line_of(path: Path, exc: Exception) -> str:
+    """The text of the line a TOML error names (so that the key is in the message)."""
+    import re
+
+    m = re.search(r"line (\d+)", str(exc))
+    if not m:
+        return ""
+    try:
+        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+        return f"; line {m.group(1)}: {lines[int(m.group(1)) - 1].strip()!r}"
+    except (OSError, IndexError):
+        return ""
 
 
 def _unknown(where: str, table: dict, allowed: Iterable[str]) -> list[str]:
@@ -64,13 +78,26 @@ def _unknown(where: str, table: dict, allowed: Iterable[str]) -> list[str]:
     return out
 
 
-def _misspelt(where: str, table: dict, base: Iterable[str]) -> list[str]:
-    """Keys close to one of ``base`` but not it (a misspelt kind, shape or model key,
-    when the rest of the table cannot be checked)."""
+def _misspelt(where: str, table: dict, base: Iterable[str], kind: str = "") -> list[str]:
+    """Keys that no registered ``kind`` (boundary, shape, impact model) takes and that are
+    not in ``base``, when the table's own kind is missing or unknown and the rest of the
+    table cannot be checked exactly."""
+    from .plugins import registry
+
     base = list(base)
-    return [f"{where}: unknown key {k} = {table[k]!r} (did you mean {close[0]}?)"
-            for k in table if k not in base
-            for close in [difflib.get_close_matches(k, base, n=1)] if close]
+    known = set(base)
+    if kind:
+        reg = registry()
+        for name in reg.names(kind):
+            known.update(getattr(reg.lookup(kind, name, where), "parameters", {}))
+    out = []
+    for k in table:
+        if k in known:
+            continue
+        close = difflib.get_close_matches(k, sorted(known), n=1)
+        hint = f" (did you mean {close[0]}?)" if close else ""
+        out.append(f"{where}: unknown key {k} = {table[k]!r}{hint}")
+    return out
 
 
 def _params(kind: str, name: Any, where: str) -> tuple[list[str], list[str]]:
@@ -141,12 +168,13 @@ def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
     for k, c in enumerate(doc.get("contacts", [])):
         names, bad = _params("impact_model", c.get("model", "hertz_mindlin"),
                              f"contacts[{k}]: model")
-        problems += (bad + _misspelt(f"contacts[{k}]", c, ["materials", "model"]) if bad
+        problems += (bad + _misspelt(f"contacts[{k}]", c, ["materials", "model"],
+                                                     "impact_model") if bad
                      else _unknown(f"contacts[{k}]", c, ["materials", "model", *names]))
     for k, b in enumerate(doc.get("boundaries", [])):
         names, bad = _params("boundary", b.get("kind"), f"boundaries[{k}]: kind")
         own = ["kind", "material", "motion"]
-        problems += (bad + _misspelt(f"boundaries[{k}]", b, own) if bad
+        problems += (bad + _misspelt(f"boundaries[{k}]", b, own, "boundary") if bad
                      else _unknown(f"boundaries[{k}]", b, [*own, *names]))
         if "motion" in b:
             problems += _motion(f"boundaries[{k}]", b["motion"])
@@ -177,7 +205,7 @@ def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
     for k, p in enumerate(doc.get("particles", [])):
         where = f"particles[{k}]"
         names, bad = _params("shape", p.get("shape", "sphere"), f"{where}: shape")
-        problems += (bad + _misspelt(where, p, PARTICLE_KEYS) if bad
+        problems += (bad + _misspelt(where, p, PARTICLE_KEYS, "shape") if bad
                      else _unknown(where, p, [*PARTICLE_KEYS, *names]))
         sources = [s for s in ("csv", "lattice", "positions") if s in p]
         if len(sources) != 1:
@@ -195,7 +223,8 @@ def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
                 problems.append(f"{where}: csv = {p['csv']!r}: no such file "
                                 f"({base / p['csv']})")
     if "output" in doc:
-        problems += _unknown("[output]", doc["output"], ["path", "every", "every_steps"])
+        problems += _unknown("[output]", doc["output"],
+                             ["path", "every", "every_steps", "overwrite"])
     if "run" in doc:
         problems += _unknown("[run]", doc["run"], ["steps", "until"])
     return problems

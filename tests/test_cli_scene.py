@@ -63,6 +63,7 @@ def test_scene_mirrors_the_api(tmp_path):
 
 def test_scene_errors_name_the_problem(tmp_path):
     bad = SCENE.replace('material = "glass"\ncsv', 'material = "steel"\ncsv')
+    (tmp_path / "p.csv").write_text("x,y,z\n0,0,0.002\n")
     (tmp_path / "s.toml").write_text(bad.format(out=tmp_path / "o.h5"))
     with pytest.raises(dpm.ParameterError, match="material='steel' is not defined"):
         load_scene(tmp_path / "s.toml")
