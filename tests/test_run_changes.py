@@ -174,7 +174,8 @@ def test_nonfinite_state_is_named():
     sim, _ = bed()
     sim.run(steps=10)
     sim.bodies.angular_velocity[3, 1] = np.inf
-    with pytest.raises(dpm.UnstableRunError, match="angular_velocity became NaN or inf for particle id.s. 3"):
+    with pytest.raises(dpm.UnstableRunError,
+                       match="angular_velocity became NaN or inf for particle id.s. 3"):
         sim.run(steps=10)
 
 
