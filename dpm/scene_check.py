@@ -94,7 +94,9 @@ def validate_scene(sim: Any) -> None:
     problems: list[str] = []
     b = sim.bodies
     if len(b) == 0:
-        problems.append("the scene has no particles (sim.add_particles)")
+        problems.append("the scene has no particles (sim.add_particles)" + (
+            "; the inlets bring none before the first step (rate x every < 1 body): add "
+            "particles, or raise the rate or every" if sim.inlets else ""))
     for name in ("position", "velocity", "angular_velocity", "orientation"):
         arr = getattr(b, name)
         bad = ~np.all(np.isfinite(arr), axis=1)

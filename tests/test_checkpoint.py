@@ -71,25 +71,36 @@ def test_restart_in_a_new_process_is_bit_identical(uninterrupted, tmp_path):
     assert_same_frames(uninterrupted / "full.h5", tmp_path / "half.h5")
 
 
+def newest_step(d: Path) -> int:
+    files = ckpt.numbered_files(d / "run.ckpt.h5")
+    return files[-1][0] if files else -1
+
+
 def kill_and_restart(d: Path, kills: int, seed: int) -> list[int]:
-    """Start the checkpointing run, kill it (SIGKILL) at a random moment after it starts
-    stepping, restart from the newest checkpoint, ``kills`` times; then let it finish.
-    Returns the step of the checkpoint each restart began from."""
+    """Start the checkpointing run, kill it (SIGKILL) at a random moment, restart from the
+    newest checkpoint, ``kills`` times; then let it finish. The moment: a random time
+    (0-0.8 s, about one checkpoint interval here) after the run wrote a new checkpoint,
+    so that every restart makes progress and the kills fall during steps, checkpoint
+    writes and output writes alike. Returns the step each restart began from."""
     rng = np.random.default_rng(seed)
     began = []
     mode = "start"
     for _ in range(kills):
+        before = newest_step(d)
         proc = subprocess.Popen([sys.executable, str(SCRIPT), str(d), mode, str(STEPS)],
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
         assert proc.stdout.readline().strip() == "running"
-        time.sleep(float(rng.uniform(0.3, 6.0)))
+        t0 = time.monotonic()
+        while proc.poll() is None and newest_step(d) <= before and time.monotonic() - t0 < 60:
+            time.sleep(0.01)
+        time.sleep(float(rng.uniform(0.0, 0.8)))
         proc.send_signal(signal.SIGKILL)
         proc.wait()
-        if not ckpt.numbered_files(d / "run.ckpt.h5"):
+        if newest_step(d) < 0:
             mode = "start"  # killed before the first checkpoint: from the beginning
             continue
         mode = "resume"
-        began.append(int(ckpt.read_attrs(ckpt.latest(d / "run.ckpt.h5"))["step"]))
+        began.append(newest_step(d))
         # whatever the kill left, the output file opens
         dpm.load(d / "run.h5")
     p = run_scene(d, mode)
@@ -113,7 +124,7 @@ def test_twenty_kills(uninterrupted, tmp_path):
     """The reliability promise: 20 kills -9 at random moments, each restarted from the
     newest checkpoint, end bit-equal to the uninterrupted run, every output readable."""
     began = kill_and_restart(tmp_path, 20, seed=2)
-    assert len(began) >= 10 and len(set(began)) >= 4  # (the kills fell all over the run)
+    assert len(set(began)) >= 5  # (the kills fell all over the run)
     name = "resume" if (tmp_path / "resume.npz").exists() else "start"
     assert_same_state(uninterrupted / "full.npz", tmp_path / f"{name}.npz")
     assert_same_frames(uninterrupted / "full.h5", tmp_path / "run.h5")
