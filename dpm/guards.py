@@ -93,11 +93,14 @@ class EnergyBook:
         return float(sum(bd.work for bd in sim.boundaries))
 
     def balance(self, sim: Any) -> dict[str, float]:
-        """initial, work, inserted, removed, current and dissipated (D above) [J]."""
-        now = mechanical_energy(sim.bodies, sim.gravity)
+        """initial, work, inserted, removed, current (E), kinetic and dissipated (D above)
+        [J]."""
+        b = sim.bodies
+        kin = kinetic_energy(b) if len(b) else 0.0
+        now = kin - float(np.sum(b.mass * (b.position @ np.asarray(sim.gravity))))
         w = self.work(sim)
         return {"initial": self.initial, "work": w, "inserted": self.inserted,
-                "removed": self.removed, "current": now,
+                "removed": self.removed, "current": now, "kinetic": kin,
                 "dissipated": self.initial + w + self.inserted - self.removed - now}
 
     def added(self, sim: Any, rows: Any) -> None:
@@ -291,7 +294,7 @@ def check(sim: Any) -> None:
     book = sim.energy
     if g.energy != "off" and book.started and len(b) and not book.adhesive:
         bal = book.balance(sim)
-        ke = kinetic_energy(b)
+        ke = bal["kinetic"]
         book.kinetic_max = max(book.kinetic_max, ke)
         scale = max(book.scale, book.kinetic_max, abs(bal["work"]), book.inserted,
                     book.floor, 1e-300)

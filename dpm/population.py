@@ -42,9 +42,10 @@ def append_bodies(sim: Any, shape: Shape, imat: int, density: float, pos: np.nda
     n = len(pos)
     from ._memory import check_request
 
-    per_body = int(shape.build(1, density).element_count[0]) if n > 1000 else 1
-    check_request(f"sim.add_particles({type(shape).__name__})", n, n * per_body)
+    call = f"sim.add_particles({type(shape).__name__})"
+    check_request(call, n, n)  # (one element each: before anything is built)
     batch = shape.build(n, density)
+    check_request(call, n, int(np.sum(batch.element_count)))  # (before the state grows)
     quat = quat_multiply(quat, np.asarray(batch.principal_rotation, float))
     first = len(sim.bodies)
     snapshot_forces(sim)

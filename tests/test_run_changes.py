@@ -210,3 +210,14 @@ def test_soak_flowing_scene(tmp_path):
         d_prev = bal["dissipated"]
     assert sim.step_count == 1_000_000 and outlet.count > 100 and bal["work"] > 0
     assert dpm.restart(tmp_path / "soak.ckpt.h5").step_count == 1_000_000
+
+
+def test_many_particles_with_one_radius_each_are_accepted():
+    """(The memory check before a large add_particles must not build the shape with the
+    parameters of one body: per-particle radii of 1,500 bodies.)"""
+    sim = dpm.Simulation(dt=1e-5)
+    glass = dpm.Material("glass", **GLASS)
+    xyz = dpm.lattice((0, 0, 0), (0.05, 0.05, 0.05), spacing=4e-3)[:1500]
+    ids = sim.add_particles("sphere", material=glass, positions=xyz,
+                            radius=np.linspace(1e-3, 1.5e-3, len(xyz)))
+    assert len(ids) == len(xyz) == 1500 and sim.bodies.radius[-1] == 1.5e-3
