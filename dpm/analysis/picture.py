@@ -115,7 +115,7 @@ def picture(source: Any, frame: int = -1, color: str = "speed", view: str = "xz"
         sc = ax.scatter(x[order, i], x[order, j], c=np.asarray(cvals)[order], s=1.0,
                         cmap=cm, norm=norm, edgecolors="k", linewidths=0.2)
     ax.set_title(title)
-    cb = fig.colorbar(sc, ax=ax, label=label, shrink=0.8)
+    cb = fig.colorbar(sc, ax=ax, label=label, shrink=0.8, pad=0.12 if view == "3d" else 0.05)
     if view != "3d":
         # marker size (points^2) of a disc of radius r, from the axes' final points per
         # metre (the colour bar has taken its room)

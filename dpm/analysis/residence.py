@@ -62,6 +62,7 @@ class ResidenceTimes:
         """Cumulative distribution F(t): the (mass) fraction of the exit stream that stayed
         at most t (a right-continuous step function of the samples)."""
         c = np.concatenate([[0.0], np.cumsum(self.weights)])
+        c /= max(c[-1], 1e-300)  # exactly 1 past the last sample
         return c[np.searchsorted(self.samples, np.asarray(t, float), side="right")]
 
     def E(self, bins: int | np.ndarray = 30, range: tuple[float, float] | None = None
