@@ -70,6 +70,10 @@ def test_outlet_flow_rate_of_known_records():
     assert len(s) == 10 and s.unit == "kg/s"
     assert np.allclose(s.value, 10.0)
     assert np.allclose(s.time, np.arange(10) * 0.1 + 0.05)
+    # Beverloo 1961: W = C rho_b sqrt(g) (D - k d)^2.5; D = 0.05 m, d = 2 mm, rho_b = 1500
+    w = an.beverloo(1500.0, 0.05, 2e-3)
+    assert w == pytest.approx(0.58 * 1500 * np.sqrt(9.81) * 0.047**2.5)
+    assert an.beverloo(1500.0, 2e-3, 2e-3) == 0.0
 
 
 def test_plane_flow_rate_of_a_falling_column():

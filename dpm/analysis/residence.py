@@ -171,3 +171,20 @@ def plane_flow_rate(run: Any, point: Any, normal: Any, bin_width: float | None =
         return Series(t[:, 1], dm / (t[:, 1] - t[:, 0]), "kg/s")
     return _bin(t[:, 1] - 1e-12 * max(abs(t[-1, 1]), 1.0), dm, bin_width, float(t[0, 0]),
                 float(t[-1, 1]))
+
+
+
+def beverloo(bulk_density: float, orifice: float, particle_diameter: float,
+             g: float = 9.81, C: float = 0.58, k: float = 1.5) -> float:
+    """The mass flow rate [kg/s] out of a flat-bottomed silo through a circular orifice
+    by Beverloo's correlation, to compare a measured :func:`outlet_flow_rate` with:
+    W = C rho_b sqrt(g) (D - k d)^(5/2), rho_b the bulk density, D the orifice diameter,
+    d the particle diameter (Beverloo, W. A., Leniger, H. A., van de Velde, J. 1961, "The
+    flow of granular solids through orifices", Chem. Eng. Sci. 15, 260-269; C ~ 0.55-0.65,
+    k ~ 1.5 typical). Zero when the orifice is narrower than k d."""
+    for name, v in (("bulk_density", bulk_density), ("orifice", orifice),
+                    ("particle_diameter", particle_diameter), ("g", g)):
+        if not v > 0:
+            raise ParameterError(f"beverloo(): {name}={v!r} must be > 0")
+    return float(C * bulk_density * np.sqrt(g) * max(orifice - k * particle_diameter, 0.0)
+                 ** 2.5)
