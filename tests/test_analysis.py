@@ -70,6 +70,8 @@ def test_outlet_flow_rate_of_known_records():
     assert len(s) == 10 and s.unit == "kg/s"
     assert np.allclose(s.value, 10.0)
     assert np.allclose(s.time, np.arange(10) * 0.1 + 0.05)
+    last = an.outlet_flow_rate(dict(rec, time=rec["time"] + 5e-4), bin_width=0.1)
+    assert len(last) == 11 and last.value[-1] == pytest.approx(0.1)  # 1 body in the 11th
     # Beverloo 1961: W = C rho_b sqrt(g) (D - k d)^2.5; D = 0.05 m, d = 2 mm, rho_b = 1500
     w = an.beverloo(1500.0, 0.05, 2e-3)
     assert w == pytest.approx(0.58 * 1500 * np.sqrt(9.81) * 0.047**2.5)

@@ -124,12 +124,17 @@ def outlet_flow_rate(source: Any, bin_width: float, outlet: int | None = None,
                      start: float | None = None, stop: float | None = None) -> Series:
     """Mass flow rate [kg/s] out of the outlets against time: the mass of the removal
     records in each bin of ``bin_width`` seconds divided by the width (from ``start``,
-    default 0, to ``stop``, default the last removal). Resolution: an outlet removes every
-    ``outlet.every`` seconds, so bins should hold several of its intervals."""
+    default 0, to ``stop``, default the end of the bin of the last removal). Resolution:
+    an outlet removes every ``outlet.every`` seconds, so bins should hold several of its
+    intervals."""
     rec = removal_records(source, outlet)
     t = np.asarray(rec["time"], float)
     t0 = 0.0 if start is None else float(start)
-    t1 = (float(t.max()) if len(t) else t0 + bin_width) if stop is None else float(stop)
+    if stop is None:  # through the bin holding the last removal
+        last = float(t.max()) if len(t) else t0
+        t1 = t0 + bin_width * (np.floor((last - t0) / bin_width) + 1)
+    else:
+        t1 = float(stop)
     if t1 <= t0:
         t1 = t0 + bin_width
     return _bin(t, np.asarray(rec["mass"], float), bin_width, t0, t1)
