@@ -1,4 +1,5 @@
-"""Command line: ``dpm run``, ``dpm plugins``, ``dpm xdmf``, ``dpm clear-cache``."""
+"""Command line: ``dpm run``, ``dpm plugins``, ``dpm xdmf``, ``dpm analyse``,
+``dpm clear-cache``."""
 
 from __future__ import annotations
 
@@ -76,6 +77,12 @@ def _cmd_xdmf(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_analyse(args: argparse.Namespace) -> int:
+    from .analysis.cli import analyse
+
+    return analyse(args)
+
+
 def _cmd_shapes(args: argparse.Namespace) -> int:
     from .shapes.metrics import report_table
 
@@ -116,6 +123,29 @@ def main(argv: list[str] | None = None) -> int:
     x = sub.add_parser("xdmf", help="(re)write the XDMF sidecar of an HDF5 run")
     x.add_argument("run")
     x.set_defaults(func=_cmd_xdmf)
+    a = sub.add_parser("analyse", help="print residence times, flow rates, energies, the "
+                       "thermo log, mixing, coordination, drum surface of an HDF5 run; draw "
+                       "a frame", description="Options take KEY=VALUE words; see "
+                       "docs/analysis.md. With no option: a summary.")
+    a.add_argument("run")
+    a.add_argument("--residence", nargs="*", metavar="KEY=VALUE",
+                   help="residence time distribution (outlet=K, mass=1, bins=N)")
+    a.add_argument("--flow", nargs="+", metavar="KEY=VALUE",
+                   help="mass flow rate through a plane (z=0.0 [normal=0,0,-1] [bin=S]) or "
+                   "out of the outlets (outlet[=K] bin=S)")
+    a.add_argument("--energy", action="store_true", help="kinetic energy of every frame")
+    a.add_argument("--thermo", action="store_true", help="the /thermo table")
+    a.add_argument("--lacey", nargs="+", metavar="KEY=VALUE",
+                   help="Lacey mixing index against time: cell=S and material=K or "
+                   "below=ID (species A: ids < ID) [min=N]")
+    a.add_argument("--coordination", nargs="*", metavar="KEY=VALUE",
+                   help="coordination number distribution (frame=K, tol=X)")
+    a.add_argument("--drum", nargs="+", metavar="KEY=VALUE",
+                   help="drum free surface and angle of repose: radius=R axis=0,1,0 "
+                   "[point=0,0,0] [frame=K] [method=highest|fraction]")
+    a.add_argument("--picture", nargs="*", metavar="KEY=VALUE",
+                   help="draw a frame: frame=-1 color=speed view=xz|3d out=frame.png")
+    a.set_defaults(func=_cmd_analyse)
     s = sub.add_parser("shapes", help="sphere count, volume and surface error of shapes at "
                        "several resolutions")
     s.add_argument("shapes", nargs="+", help="registered name (cylinder, 'block:a=4e-3,b=2e-3'),"

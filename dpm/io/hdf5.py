@@ -53,6 +53,10 @@ REMOVED_FIELDS = {"id": (0, "i8"), "time": (0, "f8"), "mass": (0, "f8"),
 #: the frame table, one entry per frame (``time`` extended last)
 FRAME_FIELDS = {"time": "f8", "step": "i8", "start": "i8", "count": "i8",
                 "element_start": "i8", "element_count": "i8"}
+#: the thermo log (:class:`dpm.analysis.Thermo`): one float64 column each, ``time``
+#: extended last (its length is the number of complete rows)
+THERMO_COLUMNS = ("time", "step", "particles", "kinetic_energy", "contacts", "max_overlap",
+                  "inserted", "removed", "work", "dissipated")
 #: the XDMF sidecar is rewritten after a frame when the last write is older than this [s]
 #: (and after the first frame, at every flush and at close)
 XDMF_INTERVAL_S = 5.0
@@ -192,6 +196,14 @@ def _layout(f: Any, sim: Simulation) -> None:
         bg.create_dataset(name, shape=(0, nb, 3), maxshape=(None, nb, 3), dtype="f8",
                           chunks=(64, nb, 3))
     group("removed", REMOVED_FIELDS, 1024)
+    _thermo_layout(f)
+
+
+def _thermo_layout(f: Any) -> None:
+    """The empty ``/thermo`` table (created with the file: SWMR allows no new dataset)."""
+    g = f.create_group("thermo")
+    for name in THERMO_COLUMNS:
+        g.create_dataset(name, shape=(0,), maxshape=(None,), dtype="f8", chunks=(1024,))
 
 
 def complete_frames(f: Any) -> tuple[int, int, int]:
@@ -225,6 +237,13 @@ def complete_removed(f: Any) -> int:
     if "removed" not in f:
         return 0
     return min(len(f["removed"][k]) for k in f["removed"])
+
+
+def complete_thermo(f: Any) -> int:
+    """Complete rows of ``/thermo`` (0 when the file has none: written by an older dpm)."""
+    if "thermo" not in f:
+        return 0
+    return min(len(f["thermo"][k]) for k in f["thermo"])
 
 
 def _check_format(f: Any, path: Path) -> None:
@@ -272,6 +291,7 @@ class Writer:
         self.rows = 0
         self.element_rows = 0
         self.removed = 0
+        self.thermo_rows = 0
 
     def _open(self) -> None:
         self.file = h5py.File(self.path, "r+", libver="latest")
@@ -284,6 +304,8 @@ class Writer:
         frames and ``removed`` removal records (a checkpoint's :meth:`state`): every
         ``/particles``, ``/elements``, ``/frames``, ``/boundaries`` and ``/removed`` dataset
         is truncated consistently, and the next :meth:`write` appends frame ``frames``.
+        ``/thermo`` keeps its rows up to the time of the last kept frame (a file without
+        that table, from an older dpm, gets an empty one).
 
         The frames after a checkpoint are the ones the restarted run writes again (the
         same states), so dropping them loses nothing. A file that a killed run left open
@@ -330,19 +352,29 @@ class Writer:
                 fr, k = f["frames"], frames - 1
                 rows = int(fr["start"][k] + fr["count"][k])
                 erows = int(fr["element_start"][k] + fr["element_count"][k])
+            has_thermo = "thermo" in f
+            thermo = 0
+            if has_thermo and frames:
+                times = f["thermo/time"][:complete_thermo(f)]
+                thermo = int(np.searchsorted(times, f["frames/time"][frames - 1],
+                                             side="right"))
             sizes = {"frames": frames, "boundaries": frames, "particles": rows,
-                     "elements": erows, "removed": removed}
+                     "elements": erows, "removed": removed, "thermo": thermo}
             if not rebuild:
                 _truncate(f, sizes)
         finally:
             f.close()
         if rebuild:
             _rebuild(path, sizes)
+        if not has_thermo:
+            with h5py.File(path, "r+", libver="latest") as f:
+                _thermo_layout(f)
         w = cls.__new__(cls)
         w.path = path
         w._open()
         w.clusters = (erows > 0 if sim.plan is None else not sim.plan.spheres_only)
         w.frames, w.rows, w.element_rows, w.removed = frames, rows, erows, removed
+        w.thermo_rows = thermo
         w.write_xdmf()
         return w
 
@@ -414,6 +446,26 @@ class Writer:
         self.removed += n
         self.file.flush()
 
+    def write_thermo(self, row: dict[str, float]) -> None:
+        """Append one row to ``/thermo`` (columns :data:`THERMO_COLUMNS`; a column the row
+        lacks is NaN) and flush; ``time`` is extended last, so a row is complete on disk
+        once its time is there."""
+        unknown = set(row) - set(THERMO_COLUMNS)
+        if unknown:
+            raise ParameterError(f"Writer.write_thermo(): unknown column(s) "
+                                 f"{', '.join(sorted(unknown))}; columns: "
+                                 f"{', '.join(THERMO_COLUMNS)}")
+        g = self.file["thermo"]
+        k = self.thermo_rows
+        for name in THERMO_COLUMNS[1:] + THERMO_COLUMNS[:1]:
+            if name == "time":
+                self.file.flush()
+            ds = g[name]
+            ds.resize(k + 1, axis=0)
+            ds[k] = float(row.get(name, np.nan))
+        self.thermo_rows = k + 1
+        self.file.flush()
+
     def write_xdmf(self) -> None:
         """Rewrite the XDMF sidecar(s) for the frames written so far (atomically)."""
         from .xdmf import write_xdmf_from_arrays
@@ -446,7 +498,7 @@ class Writer:
 def _truncate(f: Any, sizes: dict[str, int]) -> None:
     """Cut every dataset of the groups in ``sizes`` to that many rows, in place: the frame
     count (``/frames/time``) and removal count (``/removed/id``) first."""
-    for group in ("frames", "removed", "boundaries", "particles", "elements"):
+    for group in ("frames", "removed", "thermo", "boundaries", "particles", "elements"):
         if group not in f:
             continue
         g = f[group]
@@ -510,6 +562,12 @@ class Run:
             if "removed" in f:
                 m = complete_removed(f)
                 self.removed = {k: f["removed"][k][:m] for k in REMOVED_FIELDS}
+            #: the thermo log (:class:`dpm.analysis.Thermo`): column -> (rows,) array;
+            #: empty for a file without one (written by an older dpm)
+            self.thermo: dict[str, np.ndarray] = {}
+            if "thermo" in f:
+                m = complete_thermo(f)
+                self.thermo = {k: f["thermo"][k][:m] for k in f["thermo"]}
 
     def __len__(self) -> int:
         return len(self.times)
