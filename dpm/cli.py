@@ -9,7 +9,7 @@ import sys
 import time
 from pathlib import Path
 
-from .errors import DpmError
+from .errors import DpmError, ParameterError
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -23,7 +23,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         sim = restart(args.restart, scene=scene)
         print(f"restarted from step {sim.step_count} (t = {sim.time:.6g} s)")
     else:
-        sim, run_kw = load_scene(args.scene, overwrite=True if args.overwrite else None)
+        try:
+            sim, run_kw = load_scene(args.scene, overwrite=True if args.overwrite else None)
+        except ParameterError as exc:
+            if "already exists and is kept" not in str(exc):
+                raise
+            raise ParameterError(f"{exc} (on the command line: dpm run --overwrite)") from None
     if args.steps is not None:
         run_kw = {"steps": args.steps}
     elif args.until is not None:

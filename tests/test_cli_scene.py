@@ -150,3 +150,26 @@ def test_scene_with_motion_periodic_inlet_outlet(tmp_path):
     assert inlet.inserted == 20
     assert inlet.inserted == outlet.count + len(sim.bodies)
     assert np.all(np.hypot(sim.bodies.position[:, 0], sim.bodies.position[:, 2]) < 0.03)
+
+
+def test_cli_checkpoints_and_restart(tmp_path, monkeypatch, capsys):
+    """dpm run --checkpoint-every writes numbered checkpoints; --restart goes on from the
+    newest (steps count from the start); another scene's checkpoint is refused; a second
+    run onto the existing output needs --overwrite."""
+    monkeypatch.chdir(tmp_path)
+    scene = EXAMPLES / "box_settle.toml"
+    assert main(["run", str(scene), "--steps", "200", "--checkpoint-every", "0.001",
+                 "--no-progress"]) == 0
+    assert (tmp_path / "box_settle.ckpt.0000000200.h5").exists()
+    assert main(["run", str(scene), "--steps", "300", "--restart", "box_settle.ckpt.h5",
+                 "--no-progress"]) == 0
+    assert "restarted from step 200" in capsys.readouterr().out
+    other = tmp_path / "other.toml"
+    other.write_text(scene.read_text().replace("friction = 0.5", "friction = 0.4"))
+    assert "friction = 0.4" in other.read_text()
+    assert main(["run", str(other), "--steps", "300", "--restart", "box_settle.ckpt.h5",
+                 "--no-progress"]) == 2
+    assert "checkpoint of another scene" in capsys.readouterr().err
+    assert main(["run", str(scene), "--steps", "10", "--no-progress"]) == 2
+    assert "dpm run --overwrite" in capsys.readouterr().err
+    assert main(["run", str(scene), "--steps", "10", "--no-progress", "--overwrite"]) == 0
