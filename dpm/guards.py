@@ -39,9 +39,10 @@ ACTIONS = ("stop", "warn", "off")
 ESCAPE_ACTIONS = ("remove", "warn", "stop", "off")
 
 
-def mechanical_energy(b: Any, gravity: np.ndarray, rows: Any = None) -> float:
-    """Kinetic (translational and rotational) plus gravitational energy [J] of the bodies
-    ``b`` (or of ``rows`` of them); zero of the potential at the origin."""
+def energies(b: Any, gravity: np.ndarray, rows: Any = None) -> tuple[float, float]:
+    """(kinetic, mechanical) energy [J] of the bodies ``b`` (or of ``rows`` of them):
+    kinetic translational and rotational; mechanical adds the gravitational energy, zero
+    at the origin."""
     if rows is not None:
         from types import SimpleNamespace
 
@@ -50,8 +51,14 @@ def mechanical_energy(b: Any, gravity: np.ndarray, rows: Any = None) -> float:
                             angular_velocity=b.angular_velocity[rows],
                             inertia=b.inertia[rows], position=b.position[rows])
     if len(b.mass) == 0:
-        return 0.0
-    return kinetic_energy(b) - float(np.sum(b.mass * (b.position @ np.asarray(gravity))))
+        return 0.0, 0.0
+    kin = kinetic_energy(b)
+    return kin, kin - float(np.sum(b.mass * (b.position @ np.asarray(gravity))))
+
+
+def mechanical_energy(b: Any, gravity: np.ndarray, rows: Any = None) -> float:
+    """Kinetic plus gravitational energy [J] of the bodies ``b`` (or ``rows`` of them)."""
+    return energies(b, gravity, rows)[1]
 
 
 class EnergyBook:
@@ -95,9 +102,7 @@ class EnergyBook:
     def balance(self, sim: Any) -> dict[str, float]:
         """initial, work, inserted, removed, current (E), kinetic and dissipated (D above)
         [J]."""
-        b = sim.bodies
-        kin = kinetic_energy(b) if len(b) else 0.0
-        now = kin - float(np.sum(b.mass * (b.position @ np.asarray(sim.gravity))))
+        kin, now = energies(sim.bodies, sim.gravity)
         w = self.work(sim)
         return {"initial": self.initial, "work": w, "inserted": self.inserted,
                 "removed": self.removed, "current": now, "kinetic": kin,

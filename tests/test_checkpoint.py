@@ -241,7 +241,7 @@ def test_plugin_state_goes_through_the_hooks(tmp_path):
         mgr.unregister(plugin)
 
 
-def test_the_checkpoint_does_not_need_its_directory_writable_twice(tmp_path):
+def test_a_checkpoint_onto_an_existing_one_replaces_it_atomically(tmp_path):
     """A checkpoint onto an existing one replaces it atomically (os.replace)."""
     sim = small_scene()
     sim.run(steps=10)
