@@ -242,6 +242,9 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
             table.frame[k] = frames(bd.motion, np.array([sim.time]))[0]
     else:
         table = sim.walls
+    on = np.array([bd.enabled for bd in sim.boundaries], bool)[table.owner] \
+        if len(table.owner) else np.zeros(0, bool)
+    p_kind, p_par, p_owner = table.kind[on], table.par[on], table.owner[on]
     imat = sim._material_index(inlet.material, "sim.add_inlet()")
     placed_pos: list[np.ndarray] = []
     placed_r: list[float] = []
@@ -263,9 +266,9 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
             ok &= np.all(d >= rb + np.asarray(placed_r)[None], axis=1)
         pick = -1
         for k in np.flatnonzero(ok):  # the first candidate clear of every boundary
-            if len(table.kind) == 0 or boundary_gaps(
-                    cand[k:k + 1], np.array([rb]), table.frame, table.kind, table.par,
-                    table.owner)[0] >= 0.0:
+            if len(p_kind) == 0 or boundary_gaps(
+                    cand[k:k + 1], np.array([rb]), table.frame, p_kind, p_par,
+                    p_owner)[0] >= 0.0:
                 pick = int(k)
                 break
         if pick < 0:

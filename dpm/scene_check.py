@@ -80,7 +80,8 @@ def inlet_problems(sim: Any) -> list[str]:
         radii = np.full(len(pts), r)
         ok = np.ones(len(pts), bool)
         for bd in sim.boundaries:
-            ok &= ~np.asarray(bd.outside(pts, radii), bool)
+            if bd.enabled:
+                ok &= ~np.asarray(bd.outside(pts, radii), bool)
         if not np.any(ok):
             names = ", ".join(f"{k} ({bd.name})" for k, bd in enumerate(sim.boundaries))
             problems.append(f"inlet {n}: no point of its region {region!r} (of "
@@ -126,6 +127,8 @@ def validate_scene(sim: Any) -> None:
     # particles outside a boundary
     if len(b):
         for k, bd in enumerate(sim.boundaries):
+            if not bd.enabled:
+                continue
             out = bd.outside(b.position, b.radius)
             if np.any(out):
                 side = getattr(bd, "side", None)

@@ -173,7 +173,7 @@ def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
                      else _unknown(f"contacts[{k}]", c, ["materials", "model", *names]))
     for k, b in enumerate(doc.get("boundaries", [])):
         names, bad = _params("boundary", b.get("kind"), f"boundaries[{k}]: kind")
-        own = ["kind", "material", "motion"]
+        own = ["kind", "material", "motion", "switch_off", "switch_on"]
         problems += (bad + _misspelt(f"boundaries[{k}]", b, own, "boundary") if bad
                      else _unknown(f"boundaries[{k}]", b, [*own, *names]))
         if "motion" in b:

@@ -14,7 +14,7 @@ from typing import Any
 import numba
 import numpy as np
 
-from . import diagnosis, guards, population, scene_check
+from . import diagnosis, guards, population, scene_check, switches
 from . import measures as _measures
 from . import plan as _plan
 from .backends.base import (
@@ -183,6 +183,8 @@ class Simulation:
         self._next_flow = 0
         #: periodic checkpoints (:meth:`checkpoint_every`), None when off
         self._checkpoints = None
+        #: scheduled boundary switches (:mod:`dpm.switches`), by time
+        self._switches: list = []
         #: forces by id of the bodies before the population changed (population.py)
         self._force_snapshot: dict | None = None
         #: bodies with ids below this have integrator state (started)
@@ -378,6 +380,18 @@ class Simulation:
         self._forces_valid = False
         self._force_snapshot = None
         return b
+
+    def switch_off(self, boundary: Boundary | int, at: float | None = None) -> None:
+        """Switch ``boundary`` off at time ``at`` [s] (None: now): it leaves the contact
+        search, its contacts end, every other contact keeps its history; it stays in
+        ``sim.boundaries`` with zero load (:mod:`dpm.switches`). Opens an orifice under a
+        settled bed, as LIGGGHTS' ``unfix`` of a plug wall."""
+        switches.schedule(self, boundary, False, at)
+
+    def switch_on(self, boundary: Boundary | int, at: float | None = None) -> None:
+        """Switch ``boundary`` back on at time ``at`` [s] (None: now); its contacts are
+        found afresh (:mod:`dpm.switches`)."""
+        switches.schedule(self, boundary, True, at)
 
     def add_particles(self, shape: str | Shape, material: Material,
                       positions: np.ndarray | Sequence[Sequence[float]],
@@ -627,6 +641,8 @@ class Simulation:
             sorted(set(self.walls.kind.tolist())), periodic,
             any(bd.motion is not None for bd in self.boundaries), spheres)
         scene_check.check_period(self)
+        for k, bd in enumerate(self.boundaries):
+            self.walls.set_enabled(k, bd.enabled)
         self._set_frames()
         self.backend.attach(self)
         self.backend.rebuild()  # (it wraps periodic positions into the box first)
@@ -737,6 +753,8 @@ class Simulation:
             self._next_output = (self.step_count // self._output_every + 1) * self._output_every
             self._write_frame()
         self._schedule_flows()
+        if self._switches:
+            switches.apply_due(self)  # (dt may have changed since they were scheduled)
         done = 0
         chunk = 10
         try:
@@ -760,6 +778,8 @@ class Simulation:
                 if self._writer is not None and self.step_count >= self._next_output:
                     self._next_output += self._output_every
                     self._write_frame()
+                if self._switches:
+                    switches.apply_due(self)
                 if self._checkpoints is not None and \
                         self.step_count >= self._checkpoints.next_step:
                     self._checkpoints.write(self)
@@ -797,6 +817,8 @@ class Simulation:
             due.append(self._next_flow)
         if self._checkpoints is not None:
             due.append(self._checkpoints.next_step)
+        if self._switches:
+            due.append(switches.next_step(self))
         return due
 
     def _advance(self, n: int) -> int:

@@ -68,6 +68,8 @@ class Boundary:
     #: whether open ends of this boundary can be joined to another piece's (then give
     #: :meth:`pipe_ends`; :func:`dpm.boundaries.joints.join_pipe_ends` fills ``joined``)
     joinable_ends: ClassVar[bool] = False
+    #: False while switched off (:meth:`dpm.Simulation.switch_off`, :mod:`dpm.switches`)
+    enabled: bool = True
 
     def __init__(self, material: Material, call: str | None = None, motion: Any = None,
                  **params: Any) -> None:

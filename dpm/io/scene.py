@@ -26,7 +26,8 @@ Layout (every table mirrors a call; keys are the call's keyword arguments)::
     open = ["+z"]
     # any boundary may move: motion = { type = "rotation", rpm = 30, axis = [1, 0, 0] }
     # (types: translation, rotation, oscillation, triangular_oscillation, tumbling; a list
-    # of such tables composes them in order); a mesh's file is relative to the scene file
+    # of such tables composes them in order); a mesh's file is relative to the scene file;
+    # switch_off = 0.5 / switch_on = 1.0 switch it off / on at those times [s]
 
     [[periodic]]                 # sim.set_periodic("x", 0.0, 0.1)
     axis = "x"
@@ -144,7 +145,12 @@ def load_scene(path: str | Path, output: bool = True,
             b["motion"] = _motion(f"{path}: boundaries[{k}]", b["motion"])
         if kind == "mesh" and "file" in b:
             b["file"] = str(path.parent / b["file"])
-        sim.add_boundary(kind, material=m, **b)
+        off, on = b.pop("switch_off", None), b.pop("switch_on", None)
+        bd = sim.add_boundary(kind, material=m, **b)
+        if off is not None:
+            sim.switch_off(bd, at=off)
+        if on is not None:
+            sim.switch_on(bd, at=on)
     for per in doc.get("periodic", []):
         sim.set_periodic(**per)
     for k, spec in enumerate(doc.get("inlets", [])):
