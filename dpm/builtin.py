@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from .backends.cpu import CpuBackend
-from .boundaries import Bend, Box, Mesh, Plane, Sieve, Tube, Wall
+from .boundaries import Bend, Box, Mesh, OrificePlate, Plane, Sieve, Tube, Wall
 from .hookspecs import Register, hookimpl
 from .impact import (
     HertzBrilliantov,
@@ -43,6 +43,7 @@ def dpm_register_boundaries(register: Register) -> None:
     register("bend", Bend)
     register("mesh", Mesh)
     register("sieve", Sieve)
+    register("orifice_plate", OrificePlate)
 
 
 @hookimpl

@@ -691,7 +691,8 @@ class Simulation:
         loads, the instability checks (NaN, overlap beyond
         ``max_overlap``, tunnelling speed); the flow event (outlets remove, then inlets
         insert) when its interval is due; an output frame (then ``dpm_on_output``) when
-        due. Calls are as long as these events allow, aiming at ~0.1 s each.
+        due; the boundary switches (:meth:`switch_off`) when due; a periodic checkpoint
+        when due. Calls are as long as these events allow, aiming at ~0.1 s each.
         """
         if unknown:
             raise ParameterError(f"sim.run(): unknown parameter(s) {', '.join(unknown)}; "

@@ -78,6 +78,22 @@ def test_outlet_flow_rate_of_known_records():
     assert an.beverloo(1500.0, 2e-3, 2e-3) == 0.0
 
 
+def test_fit_beverloo_recovers_c_and_k():
+    """Rates made by the correlation with C = 0.6, k = 1.7 give them back; a 1 % scatter
+    moves them a little; rates that fall with D are refused."""
+    D = np.array([0.02, 0.025, 0.03, 0.04])
+    W = [an.beverloo(1500.0, x, 4e-3, C=0.6, k=1.7) for x in D]
+    C, k = an.fit_beverloo(D, W, 4e-3, 1500.0)
+    assert C == pytest.approx(0.6, rel=1e-10) and k == pytest.approx(1.7, rel=1e-10)
+    noisy = np.array(W) * (1 + 0.01 * np.array([1, -1, 1, -1]))
+    C2, k2 = an.fit_beverloo(D, noisy, 4e-3, 1500.0)
+    assert abs(C2 - 0.6) < 0.03 and abs(k2 - 1.7) < 0.2
+    with pytest.raises(ParameterError, match="do not grow"):
+        an.fit_beverloo(D, W[::-1], 4e-3, 1500.0)
+    with pytest.raises(ParameterError, match="at least two"):
+        an.fit_beverloo([0.02], [0.1], 4e-3, 1500.0)
+
+
 def test_plane_flow_rate_of_a_falling_column():
     d, v, m = 1e-3, 0.5, 2e-3  # spacing, speed down, mass: rate m v / d = 1 kg/s
     z0 = 0.25 * d + np.arange(200) * d

@@ -161,14 +161,11 @@ def test_resting_sphere_carries_its_weight(case):
     assert np.abs(sim.bodies.velocity[0]).max() < 1e-9
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "AXI contact is one closest point per primitive: a sphere centred on the axis touches a "
-    "whole circle of the cone (or of a rim) but gets one contact along an arbitrary meridian "
-    "(_unit_perpendicular), so it is pushed sideways by ~m g instead of resting"))
 def test_resting_sphere_in_a_cone():
     """A sphere in an upright cone (half angle 45 degrees) rests on the ring where its centre
-    lies r - d from the mantle: z_c = sqrt(2) (r - d) - 0.01 with the normal force per unit
-    ring length carrying m g: N cos(45) = m g, so d follows from the Hertz force N."""
+    lies r - d from the mantle: z_c = sqrt(2) (r - d) - 0.01. The ring is one contact of
+    Hertz force N(d) whose normals, averaged round the ring, give cos 45 deg along the axis
+    (axi_distance's ring quadrature): N cos(45) = m g fixes d."""
     kind, params, _, _ = RESTING["cone_inside"]
     sim, a, w = scene()
     bd = sim.add_boundary(kind, material=w, **params)

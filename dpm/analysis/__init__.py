@@ -3,7 +3,7 @@
 Definitions and sources are in each function's docstring and in ``docs/analysis.md``:
 
 - residence times: :func:`residence_times` (E(t), F(t), mean, variance);
-- flow rates: :func:`plane_flow_rate`, :func:`outlet_flow_rate`, :func:`beverloo`;
+- flow rates: :func:`plane_flow_rate`, :func:`outlet_flow_rate`, :func:`beverloo`, :func:`fit_beverloo`;
 - fields: :func:`voxel_fields` (binning), :func:`coarse_grain` (Gaussian kernel),
   :meth:`Field.slice`;
 - rotating drums: :func:`drum_surface`, :func:`angle_of_repose`;
@@ -32,6 +32,7 @@ from .picture import picture
 from .residence import (
     ResidenceTimes,
     beverloo,
+    fit_beverloo,
     outlet_flow_rate,
     plane_flow_rate,
     removal_records,
@@ -42,7 +43,8 @@ from .thermo import Thermo, format_table, thermo_row
 __all__ = [
     "DrumSurface", "Field", "ResidenceTimes", "Series", "Thermo", "angle_of_repose",
     "as_frame", "ball_points", "beverloo", "coarse_grain", "coordination_distribution",
-    "coordination_numbers", "drum_surface", "energy_balance", "force_distribution",
+    "coordination_numbers", "drum_surface", "energy_balance", "fit_beverloo",
+    "force_distribution",
     "format_table", "frames_of", "kinetic_energy", "kinetic_energy_series", "lacey",
     "lacey_index", "outlet_flow_rate", "overlap_distribution", "picture", "plane_flow_rate",
     "removal_records", "residence_times", "species_mask", "thermo_row", "voxel_fields",

@@ -193,3 +193,31 @@ def beverloo(bulk_density: float, orifice: float, particle_diameter: float,
             raise ParameterError(f"beverloo(): {name}={v!r} must be > 0")
     return float(C * bulk_density * np.sqrt(g) * max(orifice - k * particle_diameter, 0.0)
                  ** 2.5)
+
+
+def fit_beverloo(orifices: Any, rates: Any, particle_diameter: float, bulk_density: float,
+                 g: float = 9.81) -> tuple[float, float]:
+    """(C, k) of Beverloo's correlation W = C rho_b sqrt(g) (D - k d)^(5/2) fitted to
+    measured rates W [kg/s] at orifice diameters D [m] (at least two): W^(2/5) is linear in
+    D, W^(2/5) = s (D - k d) with s = (C rho_b sqrt(g))^(2/5), so a least-squares line
+    through (D, W^(2/5)) gives C = s^(5/2) / (rho_b sqrt(g)) and k = -intercept / (s d)
+    (the usual way of fitting it; Nedderman 1992, Statics and Kinematics of Granular
+    Materials, ch. 10)."""
+    D = np.asarray(orifices, float).reshape(-1)
+    W = np.asarray(rates, float).reshape(-1)
+    if D.shape != W.shape or len(D) < 2:
+        raise ParameterError(f"fit_beverloo(): give at least two orifices with one rate each "
+                             f"(got {len(D)} orifices, {len(W)} rates)")
+    if not np.all(W > 0) or not np.all(D > 0):
+        raise ParameterError(f"fit_beverloo(): orifices {D.tolist()} and rates {W.tolist()} "
+                             "must be > 0")
+    for name, v in (("particle_diameter", particle_diameter), ("bulk_density", bulk_density),
+                    ("g", g)):
+        if not v > 0:
+            raise ParameterError(f"fit_beverloo(): {name}={v!r} must be > 0")
+    s, intercept = np.polyfit(D, W ** 0.4, 1)
+    if not s > 0:
+        raise ParameterError(f"fit_beverloo(): the rates {W.tolist()} do not grow with the "
+                             f"orifice {D.tolist()}: no Beverloo fit")
+    C = s ** 2.5 / (bulk_density * np.sqrt(g))
+    return float(C), float(-intercept / (s * particle_diameter))

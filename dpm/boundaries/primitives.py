@@ -126,7 +126,8 @@ PLANE = register_primitive(PrimitiveKind(bg.PLANE, "plane", 6,
                                          (BUILTIN_MODULE, "plane_distance")))
 SLAB = register_primitive(PrimitiveKind(bg.SLAB, "slab", 12, (BUILTIN_MODULE, "slab_distance")))
 AXI = register_primitive(PrimitiveKind(bg.AXI, "axi", 12, (BUILTIN_MODULE, "axi_distance"),
-                                       returns_feature=True, joinable=True))
+                                       takes_radius=True, returns_feature=True,
+                                       joinable=True))
 TORUS = register_primitive(PrimitiveKind(bg.TORUS, "torus", 14,
                                          (BUILTIN_MODULE, "torus_distance"),
                                          returns_feature=True, joinable=True))

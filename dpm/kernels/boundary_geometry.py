@@ -8,7 +8,8 @@ centres into it). :func:`closest` returns, for a sphere centre ``(x, y, z)``:
     dist     signed distance from the centre to the primitive's surface (> 0 outside;
              the overlap of a sphere of radius r is r - dist)
     nx,ny,nz unit normal from the surface towards the centre (the direction of the force
-             on the sphere)
+             on the sphere); shorter than 1 for a ring contact of AXI, when its length
+             scales the force
     feature  0 face, 1-3 edge (v0v1, v1v2, v2v0), 4-6 vertex v0-v2 (triangles); JOINED (7)
              beyond a joined pipe end (no force); 0 else
 
@@ -26,7 +27,10 @@ AXI (2)       surface of revolution of a straight meridian segment: axis origin 
               wall (tube, cone), an annulus or a disc (rho0 = 0): dist = distance in the
               meridian plane (rho, z) to the segment, minus h; both sides touch, the
               segment's ends are rounded edges, except at an end joined to another pipe
-              piece: a centre beyond it belongs to the next piece (no contact here).
+              piece: a centre beyond it belongs to the next piece (no contact here). A
+              sphere meeting the surface in a ring (centre near the axis) gets one contact
+              integrated over the ring: the normal is then shorter than 1 and scales the
+              force (:func:`axi_distance`).
 TORUS (3)     bend: centre c [0:3], unit axis a [3:6] (normal of the bend plane), unit e1
               [6:9] (direction of angle 0; e2 = a x e1), bend radius R [9], pipe radius rp
               [10], bend angle theta [11], half thickness h [12], joined ends [13] (bit 0:
@@ -165,8 +169,44 @@ def _segment_2d(r, z, r0, z0, r1, z1):
     return 1.0, 0.0, 0.0
 
 
+#: azimuths of the ring quadrature of a surface-of-revolution contact (axi_distance)
+RING_SAMPLES = 16
+_RING_COS = tuple(math.cos(2.0 * math.pi * k / RING_SAMPLES) for k in range(RING_SAMPLES))
+_RING_SIN = tuple(math.sin(2.0 * math.pi * k / RING_SAMPLES) for k in range(RING_SAMPLES))
+_QUARTER = RING_SAMPLES // 4
+
+
 @inline_jit
-def axi_distance(p, x, y, z):
+def _meridian_sample(p, rho, zz, c, s):
+    """The meridian of an AXI primitive at azimuth phi from the centre's own (cos c, sin
+    s), for a centre at (rho, zz) from the axis: the surface normal there in the meridian
+    half-plane (er, ez) and the distance from the centre to its closest point, minus the
+    half thickness (the centre lies at (rho c, zz) in that half-plane and rho s out of it).
+    """
+    er, ez, d = _segment_2d(rho * c, zz, p[6], p[7], p[8], p[9])
+    off = rho * s
+    return er, ez, math.sqrt(d * d + off * off) - p[10]
+
+
+@inline_jit
+def axi_distance(p, x, y, z, r):
+    """Distance and normal of an AXI primitive, with the contact of a sphere of radius r
+    that meets the surface in a ring taken as one contact over the ring.
+
+    A sphere whose centre lies on or near the axis (in a cone, over an annulus' hole, on a
+    rim) touches the surface along a whole circle, not at one point: the single closest
+    point (in the centre's own meridian) would then pick an arbitrary side and push the
+    sphere off the axis. When the meridians at 1/16, 1/4 or 1/2 turn from the centre's are
+    also within r, the contact is integrated over ``RING_SAMPLES`` meridians at azimuths
+    2 pi k / 16: each sample k has overlap d_k = r - dist_k (> 0 counted) and the surface
+    normal n_k of its meridian (the pressure direction there), and the contact's normal is
+    their overlap-weighted mean N = sum d_k n_k / sum d_k. It is returned unnormalised:
+    |N| <= 1 scales the contact's force (the step normalises the direction); dist is that
+    of the centre's own meridian (the largest overlap). A symmetric ring gives the mean
+    normal of the ring (for a 45 degree cone: cos 45 deg along the axis); a contact that is
+    one patch gives |N| = 1 to rounding (every sample normal the same: a face) or nearly (a
+    rim it barely wraps); the samples change continuously with the centre, so the force
+    does too."""
     dx = x - p[0]
     dy = y - p[1]
     dz = z - p[2]
@@ -188,7 +228,46 @@ def axi_distance(p, x, y, z):
     feature = JOINED if flags != 0 and ((flags & 1 and zz < p[7]) or
                                         (flags & 2 and zz > p[9])) else 0
     er, ez, d = _segment_2d(rho, zz, p[6], p[7], p[8], p[9])
-    return (d - p[10], er * rx + ez * ax, er * ry + ez * ay, er * rz + ez * az, feature)
+    dist = d - p[10]
+    if dist >= r:
+        return (dist, er * rx + ez * ax, er * ry + ez * ay, er * rz + ez * az, feature)
+    if (_meridian_sample(p, rho, zz, _RING_COS[1], _RING_SIN[1])[2] >= r
+            and _meridian_sample(p, rho, zz, _RING_COS[_QUARTER], _RING_SIN[_QUARTER])[2] >= r
+            and _meridian_sample(p, rho, zz, -1.0, 0.0)[2] >= r):
+        return (dist, er * rx + ez * ax, er * ry + ez * ay, er * rz + ez * az, feature)
+    nx, ny, nz = ring_normal(p, rho, zz, rx, ry, rz, r)
+    return dist, nx, ny, nz, feature
+
+
+@jit
+def ring_normal(p, rho, zz, rx, ry, rz, r):
+    """The overlap-weighted mean surface normal of an AXI primitive over ``RING_SAMPLES``
+    meridians (see :func:`axi_distance`) for a centre at (rho, zz) with radial unit vector
+    r (rx, ry, rz). A plain (not inlined) function: it runs only while a ring is touched,
+    and one compiled copy serves every caller."""
+    ax, ay, az = p[3], p[4], p[5]
+    ex = ay * rz - az * ry  # e = a x (radial): the azimuthal direction
+    ey = az * rx - ax * rz
+    ez = ax * ry - ay * rx
+    sr = 0.0
+    se = 0.0
+    sa = 0.0
+    sw = 0.0
+    for k in range(RING_SAMPLES):
+        c = _RING_COS[k]
+        s = _RING_SIN[k]
+        er_k, ez_k, d_k = _meridian_sample(p, rho, zz, c, s)
+        w = r - d_k
+        if w > 0.0:
+            sr += w * er_k * c
+            se += w * er_k * s
+            sa += w * ez_k
+            sw += w
+    sr /= sw
+    se /= sw
+    sa /= sw
+    return (sr * rx + se * ex + sa * ax, sr * ry + se * ey + sa * ay,
+            sr * rz + se * ez + sa * az)
 
 
 @inline_jit
@@ -390,7 +469,7 @@ def closest_any(kind, p, x, y, z, r):
         d, nx, ny, nz = slab_distance(p, x, y, z)
         return d, nx, ny, nz, 0
     if kind == AXI:
-        return axi_distance(p, x, y, z)
+        return axi_distance(p, x, y, z, r)
     if kind == TORUS:
         return torus_distance(p, x, y, z)
     if kind == TRIANGLE:

@@ -415,6 +415,18 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
         delta = ri - dist
         if delta > worst * ri:
             worst = delta / ri
+        # a ring contact (surface of revolution) comes with a normal shorter than 1: its
+        # length scales the force, its direction is the contact's
+        scale = 1.0
+        nn = lnx * lnx + lny * lny + lnz * lnz
+        if nn < 1.0 - 1e-12:
+            scale = math.sqrt(nn)
+            if scale > 1e-150:
+                lnx /= scale
+                lny /= scale
+                lnz /= scale
+            else:
+                lnx, lny, lnz = 0.0, 0.0, 1.0
         nx, ny, nz = to_world(f, lnx, lny, lnz)
         a = ri - 0.5 * delta
         cx = xi - a * nx
@@ -444,6 +456,14 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
             pair_model[mi, mw], p, delta, -vn, vtx, vty, vtz, nx, ny, nz, b_mass[bi], ri,
             b_angvel[bi, 0] - f[15], b_angvel[bi, 1] - f[16], b_angvel[bi, 2] - f[17], dt,
             wl_hist, q)
+        if scale != 1.0:
+            fn *= scale
+            ftx *= scale
+            fty *= scale
+            ftz *= scale
+            rx *= scale
+            ry *= scale
+            rz *= scale
         fx = fn * nx + ftx
         fy = fn * ny + fty
         fz = fn * nz + ftz
