@@ -17,6 +17,7 @@ Writes benchmarks/results/hopper_discharge.json.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import os
 import re
@@ -30,8 +31,12 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "examples"))
-import hopper_discharge as hd  # noqa: E402
+# the example's scene (loaded by path: this script has the same module name)
+_spec = importlib.util.spec_from_file_location("hopper_example",
+                                               HERE.parent / "examples" / "hopper_discharge.py")
+hd = importlib.util.module_from_spec(_spec)
+sys.modules["hopper_example"] = hd
+_spec.loader.exec_module(hd)
 
 RESULTS = HERE / "results"
 RADIUS, HEIGHT = 0.04, 0.1
@@ -110,7 +115,7 @@ def run_liggghts(orifice: float, skin: float) -> dict | None:
         t = Path(tmp)
         with open(t / "silo.data", "w") as f:
             f.write(f"silo\n\n{len(pos)} atoms\n2 atom types\n\n")
-            f.write(f"-0.06 0.06 xlo xhi\n-0.06 0.06 ylo yhi\n-0.3 0.3 zlo zhi\n\nAtoms\n\n")
+            f.write("-0.06 0.06 xlo xhi\n-0.06 0.06 ylo yhi\n-0.3 0.3 zlo zhi\n\nAtoms\n\n")
             for a, (p, r) in enumerate(zip(pos, rad, strict=True), 1):
                 f.write(f"{a} 1 {2 * r:.9g} 2500 {p[0]:.9g} {p[1]:.9g} {p[2]:.9g}\n")
         floor_stl(t / "floor.stl", orifice, RADIUS + 0.01)

@@ -242,18 +242,26 @@ def main(argv: list[str] | None = None) -> dict:
             print(f"{name}: W = {r['rate_kg_s']:.4f} kg/s, {r['bodies']} beads, "
                   f"{r['wall_s']:.0f} s", flush=True)
         sim = steel_hopper()
-        r = discharge(sim, 1.5 - T_START)
+        r = discharge(sim, 0.5)
+        while len(sim.bodies) and sim.time < T_OPEN + 10.0:  # until it is empty
+            sim.run(until=sim.time + 0.5, progress=False)
         rt = an.residence_times(sim.outlets[0].records, mass_weighted=True)
         r["mean_residence_after_opening_s"] = float(rt.mean - T_OPEN)
+        r["removed"] = int(len(sim.outlets[0].records["time"]))
+        r["left_in_hopper"] = int(len(sim.bodies))
+        r["emptied_after_s"] = float(sim.outlets[0].records["time"].max() - T_OPEN)
         result["steel_hopper"] = r
-        print(f"steel hopper: {r['removed']} of {r['bodies']} out, mass-weighted mean "
-              f"residence after opening {r['mean_residence_after_opening_s']:.3f} s")
+        print(f"steel hopper: {r['removed']} of {r['bodies']} out in "
+              f"{r['emptied_after_s']:.2f} s, mass-weighted mean residence after opening "
+              f"{r['mean_residence_after_opening_s']:.3f} s")
     (out / "hopper_discharge.json").write_text(json.dumps(result, indent=1))
     picture(result, out / "hopper_discharge.png")
     return result
 
 
 def picture(result: dict, path: Path) -> None:
+    """Left: the flat silo's rate against the orifice with Beverloo's curve and the fit.
+    Right: the rates of the other hoppers beside the flat silo's at the same outlet."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -262,8 +270,12 @@ def picture(result: dict, path: Path) -> None:
     rows = result["silo"]
     D = np.array([r["orifice_m"] for r in rows])
     W = np.array([r["rate_kg_s"] for r in rows])
-    fig, ax = plt.subplots(figsize=(6, 4.2))
-    ax.plot(D * 1e3, W, "o", label="dpm, flat silo")
+    others = [(n, result[n]["rate_kg_s"]) for n in ("cone_analytic", "cone_mesh", "wedge")
+              if n in result]
+    fig, axes = plt.subplots(1, 2 if others else 1, figsize=(10 if others else 6, 4.2),
+                             squeeze=False)
+    ax = axes[0, 0]
+    ax.plot(D * 1e3, W, "o", label="dpm, flat silo (40 mm radius)")
     dd = np.linspace(max(1.6 * D_BEAD, D.min() * 0.8), D.max() * 1.1, 100)
     rho_b = float(np.mean([r["bulk_density"] for r in rows]))
     ax.plot(dd * 1e3, [an.beverloo(rho_b, x, D_BEAD, C=0.58, k=1.5) for x in dd], "k--",
@@ -271,17 +283,26 @@ def picture(result: dict, path: Path) -> None:
     fit = result.get("beverloo_fit")
     if fit:
         ax.plot(dd * 1e3, [an.beverloo(rho_b, x, D_BEAD, C=fit["C"], k=fit["k"]) for x in dd],
-                "C0-", label=f"fit C = {fit['C']:.2f}, k = {fit['k']:.2f}")
-    for name, m in (("cone_analytic", "s"), ("cone_mesh", "D"), ("wedge", "^")):
-        if name in result:
-            ax.plot(25 if name != "wedge" else 20, result[name]["rate_kg_s"], m,
-                    label=name.replace("_", " "))
-    ax.set_xlabel("orifice D [mm] (wedge: slot width)")
+                "C0-", label=f"fit: C = {fit['C']:.2f}, k = {fit['k']:.2f}")
+    ax.set_xlabel("orifice diameter D [mm]")
     ax.set_ylabel("discharge rate W [kg/s]")
-    ax.set_title(f"hopper discharge, {D_BEAD * 1e3:.0f} mm glass beads")
+    ax.set_title(f"flat-bottomed silo, {D_BEAD * 1e3:.0f} mm glass beads, "
+                 f"rho_b = {rho_b:.0f} kg/m3", fontsize=10)
     ax.legend(fontsize=8)
+    if others:
+        ax = axes[0, 1]
+        flat = [r["rate_kg_s"] for r in rows if abs(r["orifice_m"] - 0.025) < 1e-9]
+        names = (["flat silo\nD 25 mm"] if flat else []) + [
+            {"cone_analytic": "cone 30 deg\nanalytic, D 25", "cone_mesh":
+             "cone 30 deg\nmesh, D 25", "wedge": "wedge 30 deg\nslot 20 x 60"}[n]
+            for n, _ in others]
+        vals = flat + [v for _, v in others]
+        bars = ax.bar(names, vals, color=["C0"] * len(flat) + ["C1", "C2", "C3"][:len(others)])
+        ax.bar_label(bars, labels=[f"{v:.3f}" for v in vals], fontsize=8)
+        ax.set_ylabel("discharge rate W [kg/s]")
+        ax.set_title("hopper shapes (outlet at z = 0)", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
 
 

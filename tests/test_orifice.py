@@ -21,7 +21,7 @@ import math
 import numpy as np
 import pytest
 from scipy.optimize import brentq
-from test_boundaries import G, R_BALL, hertz_force, scene, sentinels, sphere_mass, static_overlap
+from test_boundaries import R_BALL, G, hertz_force, scene, sentinels, sphere_mass, static_overlap
 
 import dpm
 from dpm.errors import ParameterError

@@ -3,7 +3,8 @@
 Definitions and sources are in each function's docstring and in ``docs/analysis.md``:
 
 - residence times: :func:`residence_times` (E(t), F(t), mean, variance);
-- flow rates: :func:`plane_flow_rate`, :func:`outlet_flow_rate`, :func:`beverloo`, :func:`fit_beverloo`;
+- flow rates: :func:`plane_flow_rate`, :func:`outlet_flow_rate`, :func:`beverloo`,
+  :func:`fit_beverloo`;
 - fields: :func:`voxel_fields` (binning), :func:`coarse_grain` (Gaussian kernel),
   :meth:`Field.slice`;
 - rotating drums: :func:`drum_surface`, :func:`angle_of_repose`;

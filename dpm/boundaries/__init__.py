@@ -10,4 +10,5 @@ from .sieve import Sieve
 from .tube import Tube
 from .wall import Wall
 
-__all__ = ["Bend", "Boundary", "Box", "Mesh", "OrificePlate", "Plane", "Primitives", "Sieve", "Tube", "Wall"]
+__all__ = ["Bend", "Boundary", "Box", "Mesh", "OrificePlate", "Plane", "Primitives", "Sieve",
+           "Tube", "Wall"]
