@@ -21,7 +21,7 @@ orifice diameters (a window of ``WINDOW`` s after a start-up transient), from th
 records. Soft beads (E = 10 MPa) keep dt at 2e-5 s; Beverloo's law does not depend on the
 stiffness while overlaps stay small (< 1 % here).
 
-    python examples/hopper_discharge.py            # all four scenes (~10 min, 2 cores)
+    python examples/hopper_discharge.py            # all four scenes (~8 min, one core)
     python examples/hopper_discharge.py --quick    # one small silo (CI)
 
 Writes hopper_discharge.json, hopper_discharge.png and the HDF5 + XDMF of the silo with the
@@ -243,16 +243,21 @@ def main(argv: list[str] | None = None) -> dict:
                   f"{r['wall_s']:.0f} s", flush=True)
         sim = steel_hopper()
         r = discharge(sim, 0.5)
-        while len(sim.bodies) and sim.time < T_OPEN + 10.0:  # until it is empty
+        while len(sim.bodies) and sim.time < T_OPEN + 10.0:  # until nothing more leaves
+            n = len(sim.bodies)
             sim.run(until=sim.time + 0.5, progress=False)
+            if len(sim.bodies) == n:
+                break
         rt = an.residence_times(sim.outlets[0].records, mass_weighted=True)
         r["mean_residence_after_opening_s"] = float(rt.mean - T_OPEN)
         r["removed"] = int(len(sim.outlets[0].records["time"]))
         r["left_in_hopper"] = int(len(sim.bodies))
-        r["emptied_after_s"] = float(sim.outlets[0].records["time"].max() - T_OPEN)
+        # (a flat bottom keeps a dead zone at the wall: it never empties completely)
+        r["last_out_after_s"] = float(sim.outlets[0].records["time"].max() - T_OPEN)
         result["steel_hopper"] = r
-        print(f"steel hopper: {r['removed']} of {r['bodies']} out in "
-              f"{r['emptied_after_s']:.2f} s, mass-weighted mean residence after opening "
+        print(f"steel hopper: {r['removed']} of {r['bodies']} out, the last "
+              f"{r['last_out_after_s']:.2f} s after the opening; mass-weighted mean residence "
+              "after opening "
               f"{r['mean_residence_after_opening_s']:.3f} s")
     (out / "hopper_discharge.json").write_text(json.dumps(result, indent=1))
     picture(result, out / "hopper_discharge.png")
