@@ -9,7 +9,9 @@ checks against references independent of the quantity checked.
 - charge shape: centre of mass on the rising side, shoulder above toe.
 
 The quick run takes ~20 s with a warm compile cache (~2 min cold: the step compiles);
-the slow tests take 4.6 min (steady state, 7,741 beads) and 40 s (mesh lifters, warm).
+the slow test (mesh lifters) 40 s warm. The steady state of the default slice (work rate
+against dissipation, drive power against the torque arm, within 1 %) is what
+``python examples/ball_mill.py`` reports (docs/scenes.md); at 4.6 min it is not a test.
 """
 
 from __future__ import annotations
@@ -91,18 +93,6 @@ def test_charge_is_lifted_and_shaped(quick):
     assert math.sin(shoulder) > math.sin(toe) + 0.3
     # beads near the shell move with it (thesis sec. 6.2: ~0.7 m/s at 60 % critical)
     assert r["max_map_speed"] > 0.8 * r["shell_speed"]
-
-
-@pytest.mark.slow
-def test_steady_state_energy_and_torque_balance(tmp_path):
-    """The default slice (J = 35 %) at 70 % critical for 1.5 revolutions: in the steady
-    state the work put in is dissipated and the drive torque is the weight's torque arm."""
-    s = _example().main(["--speeds", "0.7", "--revolutions", "1.5", "--output",
-                         str(tmp_path)])
-    r = s["speeds"][0]
-    assert r["dissipation_rate_W"] == pytest.approx(r["power_from_work_W"], rel=0.15)
-    assert r["power_mean_W"] == pytest.approx(r["power_torque_arm_W"], rel=0.15)
-    assert 180 < r["toe_deg"] < 270 and 0 < r["shoulder_deg"] < 90
 
 
 @pytest.mark.slow
