@@ -231,24 +231,27 @@ def axi_distance(p, x, y, z, r):
     dist = d - p[10]
     if dist >= r:
         return (dist, er * rx + ez * ax, er * ry + ez * ay, er * rz + ez * az, feature)
-    if (_meridian_sample(p, rho, zz, _RING_COS[1], _RING_SIN[1])[2] >= r
-            and _meridian_sample(p, rho, zz, _RING_COS[_QUARTER], _RING_SIN[_QUARTER])[2] >= r
-            and _meridian_sample(p, rho, zz, -1.0, 0.0)[2] >= r):
-        return (dist, er * rx + ez * ax, er * ry + ez * ay, er * rz + ez * az, feature)
-    nx, ny, nz = ring_normal(p, rho, zz, rx, ry, rz, r)
+    nx, ny, nz = ring_normal(p, rho, zz, rx, ry, rz, r, er, ez)
     return dist, nx, ny, nz, feature
 
 
 @jit
-def ring_normal(p, rho, zz, rx, ry, rz, r):
-    """The overlap-weighted mean surface normal of an AXI primitive over ``RING_SAMPLES``
-    meridians (see :func:`axi_distance`) for a centre at (rho, zz) with radial unit vector
-    r (rx, ry, rz). A plain (not inlined) function: it runs only while a ring is touched,
-    and one compiled copy serves every caller."""
+def ring_normal(p, rho, zz, rx, ry, rz, r, er, ez):
+    """The contact normal of a touching AXI primitive for a centre at (rho, zz) with
+    radial unit vector (rx, ry, rz), (er, ez) the normal in the centre's own meridian: that
+    normal, unless the meridians 1/16, 1/4 or 1/2 turn away are within r too; then the
+    overlap-weighted mean surface normal over ``RING_SAMPLES`` meridians (see
+    :func:`axi_distance`). A plain (not inlined) function: every step kernel that inlines
+    ``closest`` calls one compiled copy (inlined, it made each scene with a surface of
+    revolution compile ~1.6x longer)."""
     ax, ay, az = p[3], p[4], p[5]
+    if (_meridian_sample(p, rho, zz, _RING_COS[1], _RING_SIN[1])[2] >= r
+            and _meridian_sample(p, rho, zz, _RING_COS[_QUARTER], _RING_SIN[_QUARTER])[2] >= r
+            and _meridian_sample(p, rho, zz, -1.0, 0.0)[2] >= r):
+        return er * rx + ez * ax, er * ry + ez * ay, er * rz + ez * az
     ex = ay * rz - az * ry  # e = a x (radial): the azimuthal direction
     ey = az * rx - ax * rz
-    ez = ax * ry - ay * rx
+    ez_ = ax * ry - ay * rx
     sr = 0.0
     se = 0.0
     sa = 0.0
@@ -267,7 +270,7 @@ def ring_normal(p, rho, zz, rx, ry, rz, r):
     se /= sw
     sa /= sw
     return (sr * rx + se * ex + sa * ax, sr * ry + se * ey + sa * ay,
-            sr * rz + se * ez + sa * az)
+            sr * rz + se * ez_ + sa * az)
 
 
 @inline_jit
