@@ -427,14 +427,11 @@ class BoundaryTable:
         #: the search rows of every boundary when on (:meth:`set_enabled` empties a
         #: switched-off boundary's rows: the search then finds none of its primitives)
         self.grid_on = self.grid_int.copy()
-        #: per boundary: on (True) or switched off
-        self.on = np.ones(nb, bool)
 
     def set_enabled(self, k: int, on: bool) -> None:
         """Let the contact search see boundary ``k`` (``on``) or none of its primitives
         (:mod:`dpm.switches`)."""
         self.grid_int[k] = self.grid_on[k]
-        self.on[k] = bool(on)
         if not on:
             self.grid_int[k, 0] = 0           # no grid: the plain loop over [5, 6) ...
             self.grid_int[k, 6] = self.grid_on[k, 5]   # ... which is empty

@@ -113,7 +113,4 @@ def refresh(sim: Any) -> None:
         table.set_enabled(k, bd.enabled)
     if sim._prepared:
         sim.backend.rebuild()
-        for k, bd in enumerate(sim.boundaries):
-            if not bd.enabled:
-                sim.backend.boundary_loads()[k, :6] = 0.0
-        sim._update_boundary_loads()
+        sim._update_boundary_loads()  # (set_enabled zeroed the load of those switched off)
