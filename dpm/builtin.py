@@ -73,3 +73,6 @@ def dpm_register_integrators(register: Register) -> None:
 @hookimpl
 def dpm_register_backends(register: Register) -> None:
     register("cpu", CpuBackend)
+    from .parallel.backend import MpiBackend
+
+    register("mpi", MpiBackend)

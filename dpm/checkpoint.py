@@ -182,6 +182,8 @@ def write(sim: Simulation, path: str | os.PathLike) -> Path:
     path = Path(path)
     if path.is_dir():
         raise ParameterError(f"sim.checkpoint(): path={str(path)!r} is a directory")
+    if not getattr(sim.backend, "root", True):
+        return path  # (MPI: every rank holds the whole state; rank 0 writes it)
     path.parent.mkdir(parents=True, exist_ok=True)
     if sim._writer is not None:
         sim._writer.flush()  # the frames the checkpoint counts are on disk
@@ -266,6 +268,8 @@ class Schedule:
     def write(self, sim: Simulation) -> Path:
         self.next_step = sim.step_count + self.interval(sim.dt)  # (stored as the next one)
         path = write(sim, numbered(self.base, sim.step_count))
+        if not getattr(sim.backend, "root", True):
+            return path
         for _, old in numbered_files(self.base)[:-self.keep]:
             old.unlink(missing_ok=True)
         return path

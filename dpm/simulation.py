@@ -83,11 +83,14 @@ class Simulation:
         stays as inserted, which spares about a tenth of a settled packing's step.
         Positions, velocities and angular velocities are the same bit for bit either way.
         Clustered bodies always rotate.
-    device : str or Backend
-        Where the steps run: a registered backend name (``"cpu"``, the default; ``dpm
+    device : str or Backend, optional
+        Where the steps run: a registered backend name (``"cpu"``, ``"mpi"``; ``dpm
         plugins`` lists them) or a backend instance (e.g.
-        ``dpm.backends.CpuBackend(force_pass="two_pass")``). The script is the same for
-        every backend (:mod:`dpm.backends.base`).
+        ``dpm.backends.CpuBackend(force_pass="two_pass")``). Default: ``"mpi"`` when the
+        process was started by ``mpiexec`` with more than one rank (the scene is cut into
+        one sub-domain per rank, :mod:`dpm.parallel`), else ``"cpu"``; ``"cpu"`` under
+        ``mpiexec`` runs a whole copy of the scene on each rank. The script is the same
+        for every backend (:mod:`dpm.backends.base`).
 
     The order of a step and of the events around it is given in :meth:`run`.
 
@@ -114,7 +117,7 @@ class Simulation:
                  integrator: str = "velocity_verlet", skin: float | None = None,
                  dt_check: str = "refuse", max_overlap: float = 0.5,
                  overlap_tolerance: float = 0.01, threads: int | None = None,
-                 sphere_orientation: bool = True, device: str | Backend = "cpu",
+                 sphere_orientation: bool = True, device: str | Backend | None = None,
                  **unknown: Any) -> None:
         self._auto_dt = isinstance(dt, str) and dt == "auto"
         v = validate("Simulation()", self.parameters, dict(
@@ -130,6 +133,10 @@ class Simulation:
         self._registry = registry()
         self.integrator = self._registry.lookup("integrator", integrator,
                                                 "Simulation()")()
+        if device is None:  # "mpi" when started by mpiexec on several ranks, else "cpu"
+            from .parallel import default_device
+
+            device = default_device()
         if isinstance(device, str):
             cls = self._registry.lookup("backend", device, "Simulation()")
             device = cls(threads=None if threads is None else int(threads))
@@ -742,14 +749,20 @@ class Simulation:
         hooks = self._registry.manager.hook
         per_step_hooks = bool(hooks.dpm_before_step.get_hookimpls()
                               or hooks.dpm_after_step.get_hookimpls())
-        bar = Progress(nsteps, self.dt, self.time, enabled=progress)
+        root = getattr(self.backend, "root", True)  # (MPI: rank 0 writes and reports)
+        bar = Progress(nsteps, self.dt, self.time, enabled=progress if root else False)
         if self._output_path is not None and self._writer is None:
             from .io.hdf5 import Writer
 
             if self._output_every_s is not None:
                 self._output_every = max(1, round(self._output_every_s / self.dt))
-            self._writer = Writer(self._output_path, self,
-                                  overwrite=self._output_overwrite)
+            if root:
+                self._writer = Writer(self._output_path, self,
+                                      overwrite=self._output_overwrite)
+            else:
+                from .io.hdf5 import NullWriter
+
+                self._writer = NullWriter(self._output_path, self)
             self.last_output = self._writer
             self._next_output = (self.step_count // self._output_every + 1) * self._output_every
             self._write_frame()
@@ -790,8 +803,11 @@ class Simulation:
                 # ~60 ms and the checks ~4 ms, which at one or two steps per call had cost
                 # a tenth of the run
                 if elapsed > 0:
-                    aim = max(0.1, 100.0 * self._check_cost)
+                    aim = max(getattr(self.backend, "call_aim", 0.1),
+                              100.0 * self._check_cost)
                     chunk = int(min(max(chunk * min(aim / elapsed, 4.0), 1), 100000))
+                if hasattr(self.backend, "agree_chunk"):  # (MPI: the same on every rank)
+                    chunk = self.backend.agree_chunk(chunk)
         finally:
             bar.close()
             if self._writer is not None:

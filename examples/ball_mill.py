@@ -483,10 +483,14 @@ def morrell_angles(phi: float, fill: float) -> tuple[float, float]:
     return math.degrees(tt), math.degrees(ts)
 
 
-def full_charge(steps: int, out: Path, settle: int = 800) -> dict:
+def full_charge(steps: int, out: Path, settle: int = 800, revolutions: float = 0.0) -> dict:
     """Build the whole mill with the full charge, let it fall into contact for ``settle``
     steps (20 ms by default: the lattice's 0.1 r gaps close from the bottom up), then time
-    ``steps`` steps."""
+    ``steps`` steps; with ``revolutions`` > 0 run that many revolutions instead, sampling
+    the drive power, torque and contacts every 10 ms (``ball_mill_full_charge.json`` is
+    rewritten at each sample, so a stopped run keeps what it measured)."""
+    if revolutions > 0:
+        return full_charge_revolutions(revolutions, out, settle)
     t0 = time.perf_counter()
     sim = build(0.7, length=L_MILL, periodic=False, ramp=0.0)
     n = len(sim.bodies)
@@ -526,6 +530,59 @@ def full_charge(steps: int, out: Path, settle: int = 800) -> dict:
     return res
 
 
+def full_charge_revolutions(revolutions: float, out: Path, settle: int) -> dict:
+    """The whole mill (full charge, end plates) for ``revolutions`` revolutions at 70 %
+    critical after ``settle`` steps: cost per step along the run, drive power and torque,
+    and the weight's torque arm M g x_cm omega (the steady-state check of the slice)."""
+    t0 = time.perf_counter()
+    sim = build(0.7, length=L_MILL, periodic=False, ramp=0.0)
+    n = len(sim.bodies)
+    mass = float(sim.bodies.mass.sum())
+    total = int(round(revolutions * 60 / rpm_of(0.7) / sim.dt))
+    sample = int(round(0.01 / sim.dt))
+    res = {"beads": n, "revolutions": revolutions, "settle_steps": settle,
+           "steps": total, "dt_s": sim.dt, "build_s": time.perf_counter() - t0,
+           "thesis_particle_steps_per_s": THESIS_PARTICLE_STEPS,
+           "samples": {k: [] for k in ("t", "steps_done", "wall_s", "particle_steps_per_s",
+                                       "contacts_per_bead", "power_W", "torque_Nm",
+                                       "torque_arm_W", "work_J")}}
+    print(f"full charge: {n} beads, {settle} settling steps then {revolutions} "
+          f"revolution(s) = {total} steps at 70 % critical", flush=True)
+    t0 = time.perf_counter()
+    sim.run(steps=settle, progress=False)
+    res["settle_s"] = time.perf_counter() - t0
+    run_wall = 0.0
+    done = 0
+    smp = res["samples"]
+    while done < total:
+        k = min(sample, total - done)
+        t1 = time.perf_counter()
+        sim.run(steps=k, progress=False)
+        dt_wall = time.perf_counter() - t1
+        run_wall += dt_wall
+        done += k
+        p, tq, w = drive(sim)
+        xcm = float(sim.bodies.mass @ sim.bodies.position[:, 0]) / mass
+        for key, v in (("t", sim.time), ("steps_done", done), ("wall_s", run_wall),
+                       ("particle_steps_per_s", n * k / dt_wall),
+                       ("contacts_per_bead", sim.contact_count() / n), ("power_W", p),
+                       ("torque_Nm", tq), ("torque_arm_W", mass * G * xcm * sim.omega),
+                       ("work_J", w)):
+            smp[key].append(float(v))
+        res["particle_steps_per_s"] = n * done / run_wall
+        res["s_per_1000_steps"] = 1000 * run_wall / done
+        res["ratio_to_thesis"] = res["particle_steps_per_s"] / THESIS_PARTICLE_STEPS
+        res["steps_done"] = done
+        half = slice(len(smp["t"]) // 2, None)  # the second half of the run
+        res["power_second_half_W"] = float(np.mean(smp["power_W"][half]))
+        res["torque_arm_second_half_W"] = float(np.mean(smp["torque_arm_W"][half]))
+        (out / "ball_mill_full_charge.json").write_text(json.dumps(res, indent=1))
+        print(f"  t = {sim.time:.3f} s, {done}/{total} steps, {run_wall:.0f} s, "
+              f"{res['particle_steps_per_s']:.3g} p-s/s, power {p:.1f} W", flush=True)
+    sim.close()
+    return res
+
+
 def main(argv: list[str] | None = None) -> dict:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true",
@@ -541,12 +598,15 @@ def main(argv: list[str] | None = None) -> dict:
                    help="build the whole mill with the full charge and time N steps")
     p.add_argument("--full-charge-settle", type=int, default=800, metavar="S",
                    help="steps before the timed ones (the lattice falls into contact)")
+    p.add_argument("--full-charge-revolutions", type=float, default=0.0, metavar="R",
+                   help="whole mill: run R revolutions at 70 %% (sampled every 10 ms)")
     args = p.parse_args(argv)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
-    if args.full_charge_steps:
+    if args.full_charge_steps or args.full_charge_revolutions:
         return {"full_charge": full_charge(args.full_charge_steps, out,
-                                           args.full_charge_settle)}
+                                           args.full_charge_settle,
+                                           args.full_charge_revolutions)}
     if args.quick:
         speeds = args.speeds or [0.7]
         # 0.5 s: the 0.2 s ramp and 0.3 s at speed; averages over the last quarter turn

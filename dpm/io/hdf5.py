@@ -495,6 +495,45 @@ class Writer:
             self.file.close()
 
 
+class NullWriter:
+    """What an MPI rank other than 0 keeps in place of a :class:`Writer`: the same frame
+    and record counts (so that output and checkpoints fall on the same steps and a
+    checkpoint names the same file), no file. Rank 0 writes the whole scene, which every
+    rank holds between kernel calls (:mod:`dpm.parallel`)."""
+
+    def __init__(self, path: str | Path, sim: Simulation) -> None:
+        self.path = Path(path)
+        self.clusters = not (sim.plan is None or sim.plan.spheres_only)
+        self.frames = 0
+        self.rows = 0
+        self.element_rows = 0
+        self.removed = 0
+        self.thermo_rows = 0
+
+    def state(self) -> dict[str, Any]:
+        return {"frames": self.frames, "removed": self.removed, "path": str(self.path)}
+
+    def write(self, sim: Simulation) -> None:
+        self.frames += 1
+
+    def write_removed(self, records: dict[str, np.ndarray], outlet: int) -> None:
+        self.removed += len(records["id"])
+
+    def write_thermo(self, row: dict[str, float]) -> None:
+        self.thermo_rows += 1
+
+    def write_xdmf(self) -> None:
+        """No file here."""
+
+    closed = False
+
+    def flush(self) -> None:
+        """No file here."""
+
+    def close(self) -> None:
+        """No file here."""
+
+
 def _truncate(f: Any, sizes: dict[str, int]) -> None:
     """Cut every dataset of the groups in ``sizes`` to that many rows, in place: the frame
     count (``/frames/time``) and removal count (``/removed/id``) first."""

@@ -781,7 +781,8 @@ def compute_forces(dt, integrate, ctl, bodies, elems, pairs, walls, bnd, diag):
         for d in range(6):
             f_load[b, d] = 0.0
     ne = e_worst.shape[0]
-    for q in range(wl_start[ne]):
+    # the load of owned elements only (ghosts' entries are their owner's to count)
+    for q in range(wl_start[bodies.estart[ctl.n_owned]]):
         if wl_active[q]:
             b = w_owner[wl_w[q]]
             for d in range(3):

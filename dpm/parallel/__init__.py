@@ -1,0 +1,47 @@
+"""Runs over MPI ranks: domain decomposition (:mod:`dpm.parallel.backend`).
+
+``mpiexec -n 4 python script.py`` (or ``mpiexec -n 4 dpm run scene.toml``) runs the
+script's scene cut into four sub-domains, with no change to the script: a
+:class:`dpm.Simulation` made without ``device`` takes the ``"mpi"`` backend when the
+launcher started several ranks. Whether it did is read from the launcher's environment
+(Open MPI's ``OMPI_COMM_WORLD_SIZE``, MPICH's and Intel MPI's ``PMI_SIZE``, PMIx'
+``PMIX_SIZE``... ), so that a serial run never imports mpi4py.
+"""
+
+from __future__ import annotations
+
+import os
+
+#: environment variables in which MPI launchers give the number of ranks
+SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "MPI_LOCALNRANKS",
+                  "SLURM_NTASKS_MPI")
+
+
+def launched_ranks() -> int:
+    """The number of ranks the launcher started this process among (1: not launched by
+    an MPI launcher, or alone)."""
+    for name in SIZE_VARIABLES:
+        value = os.environ.get(name)
+        if value:
+            try:
+                return max(1, int(value))
+            except ValueError:
+                continue
+    return 1
+
+
+def default_device() -> str:
+    """``"mpi"`` under an MPI launcher with several ranks, else ``"cpu"``."""
+    return "mpi" if launched_ranks() > 1 else "cpu"
+
+
+def rank() -> int:
+    """This process's rank (0 without MPI; mpi4py imported only under a launcher)."""
+    if launched_ranks() == 1:
+        return 0
+    from mpi4py import MPI
+
+    return int(MPI.COMM_WORLD.Get_rank())
+
+
+__all__ = ["default_device", "launched_ranks", "rank"]

@@ -1,0 +1,566 @@
+"""The MPI backend: one sub-domain per rank, ghost layers, migration with contact history.
+
+Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton off``):
+
+- **Between kernel calls the host state is whole on every rank.** ``sim.bodies``, the
+  elements and both contact lists hold the whole scene, so everything the run loop does
+  between calls (flow events, output, checkpoints, hooks, guards, diagnosis) runs as on
+  one process, the same on every rank; only rank 0 writes files. A call scatters the
+  host state into each rank's sub-domain and gathers it back at its end (each rank sends
+  its owned rows to all).
+- **Sub-domains**: orthogonal recursive bisection (:mod:`dpm.parallel.decomposition`)
+  over the bodies' measured cost (elements plus listed contacts), redone at a call's
+  start when the ranks' step times differ by more than ``rebalance`` (LIGGGHTS' ``fix
+  balance`` threshold; 1.1 by default), and always after the population changed.
+- **Ownership and ghosts**: a rank owns the bodies whose centre lies in its box and holds
+  as ghosts every body of another rank with a listed contact partner among its own
+  elements (at a call's start), or within 2 r_max + skin (+ the body's own extent) of its
+  box (at a list rebuild): a clustered body is ghosted whole. Each rank computes every
+  contact among its rows (owned-ghost pairs on both ranks, Newton's third law not used
+  across ranks), so an owned body's force is complete without sending forces back.
+- **Every step**: the integrator's pre-force part runs for owned bodies and ghosts alike
+  (a ghost holds its owner's state, so it reaches the same bits), the rebuild decision
+  is collective (``Allreduce``), forces and the post-force part run for owned bodies,
+  and then each owner sends its ghosts' new state to the ranks holding them (one
+  message per neighbour, mpi4py buffer calls, ``Isend``/``Irecv``; rows packed and
+  unpacked by numba kernels, :mod:`dpm.kernels.halo`).
+- **At a list rebuild** (the same step on every rank, since ghosts move as their owners):
+  bodies whose centre left the box migrate to the rank whose box holds it, with their
+  full state (orientation, angular velocity, the integrator's rows) and the history of
+  every contact they touch; ghost layers are chosen again; each rank rebuilds its lists,
+  carrying every contact's history by pair.
+- Boundary loads and work are summed over ranks (each counts its owned elements only).
+
+Refused with a clear error: periodic faces and implicit integrators (not yet).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from ..backends.base import STATUS_NAN, STATUS_OK, STATUS_OVERLAP, StepResult
+from ..backends.cpu import CpuBackend
+from ..errors import ParameterError
+from ..kernels.halo import STATE_WIDTH, pack_state, unpack_state
+from . import decomposition as dec
+from .local import Entries, LocalScene, Pool, assemble, element_rows, set_entries
+
+
+class MpiBackend(CpuBackend):
+    """Domain decomposition over MPI ranks (module docstring). On one rank it is the CPU
+    backend. ``threads`` are each rank's threads (MPI x threads); ``rebalance`` the
+    imbalance (largest over mean step time of the ranks) above which a call's start cuts
+    the domain again."""
+
+    name = "mpi"
+
+    def __init__(self, threads: int | None = None, force_pass: str = "auto",
+                 rebalance: float = 1.1, comm: Any = None) -> None:
+        super().__init__(threads=threads, force_pass=force_pass)
+        if not (isinstance(rebalance, int | float) and rebalance >= 1.0):
+            raise ParameterError(f"MpiBackend(): rebalance={rebalance!r}; allowed: a "
+                                 "number >= 1 (largest over mean step time)")
+        self.rebalance = float(rebalance)
+        self._comm = comm
+        self._reset_local()
+        #: per-call figures of the last call: steps, compute, halo and migration seconds,
+        #: ghosts, owned bodies (this rank)
+        self.timing: dict[str, float] = {}
+
+    def _reset_local(self) -> None:
+        self.local: LocalScene | None = None
+        self.inner: CpuBackend | None = None
+        self.boxes: np.ndarray | None = None
+        self._host_copy: tuple | None = None
+        self._step_time = 0.0
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = super().__getstate__()
+        for k in ("_comm", "local", "inner", "boxes", "_host_copy", "_plan_halo"):
+            state[k] = None
+        return state
+
+    # ------------------------------------------------------------------ communicator
+    @property
+    def comm(self) -> Any:
+        if self._comm is None:
+            from mpi4py import MPI
+
+            self._comm = MPI.COMM_WORLD
+        return self._comm
+
+    @property
+    def ranks(self) -> int:
+        return int(self.comm.Get_size())
+
+    @property
+    def rank(self) -> int:
+        return int(self.comm.Get_rank())
+
+    @property
+    def root(self) -> bool:
+        """Whether this rank writes the files (rank 0)."""
+        return self.rank == 0
+
+    #: a call scatters and gathers the whole state: aim at longer calls than one process
+    @property
+    def call_aim(self) -> float:
+        return 0.1 if self.ranks == 1 else 1.0
+
+    def agree_chunk(self, n: int) -> int:
+        """The steps of the next call, the same on every rank (the smallest asked)."""
+        if self.ranks == 1:
+            return n
+        from mpi4py import MPI
+
+        return int(self.comm.allreduce(int(n), op=MPI.MIN))
+
+    # ------------------------------------------------------------------ host changes
+    def attach(self, sim: Any) -> None:
+        if self.ranks > 1:
+            if np.any(sim.period[3:] > 0):
+                raise ParameterError("Simulation(device='mpi'): periodic faces are not "
+                                     "supported across ranks yet; run this scene on one "
+                                     "process (device='cpu')")
+            if sim.integrator.implicit:
+                raise ParameterError(f"Simulation(device='mpi'): the implicit "
+                                     f"{sim.integrator.name} integrator is not supported "
+                                     "across ranks; choose an explicit one")
+        super().attach(sim)
+        self._reset_local()
+
+    def rebuild(self) -> None:
+        super().rebuild()
+        self._host_copy = None
+
+    def population_changed(self) -> None:
+        super().population_changed()
+        self._reset_local()
+
+    def prime(self) -> None:
+        super().prime()
+        self._host_copy = None
+
+    def keep_bodies(self, keep_b: np.ndarray) -> None:
+        super().keep_bodies(keep_b)
+        self._reset_local()
+
+    def permute_bodies(self, order: np.ndarray) -> None:
+        super().permute_bodies(order)
+        self._reset_local()
+
+    def _host_unchanged(self) -> bool:
+        """Whether the host state is still what the last call gathered (a script may
+        have changed it between runs)."""
+        if self._host_copy is None or self.local is None:
+            return False
+        b = self.sim.bodies
+        return all(np.array_equal(a, c) for a, c in zip(
+            (b.position, b.velocity, b.angular_velocity, b.orientation, b.mass),
+            self._host_copy, strict=True))
+
+    # ------------------------------------------------------------------ the steps
+    def advance(self, n: int, dt: float, frames: np.ndarray) -> StepResult:
+        if self.ranks == 1:
+            return super().advance(n, dt, frames)
+        from mpi4py import MPI
+
+        comm = self.comm
+        n = int(comm.allreduce(int(n), op=MPI.MIN))
+        # a new cut when the host state changed (on any rank) or the ranks' step times
+        # drifted apart by more than ``rebalance``
+        times = comm.allgather(self._step_time)
+        same = comm.allreduce(int(self._host_unchanged()), op=MPI.MIN)
+        if not same or dec.imbalance(times) > self.rebalance:
+            if same:
+                self.boxes = None
+            self._scatter()
+        inner, loc = self.inner, self.local
+        module = self.module
+        inner.module = module
+        walls = self.sim.walls
+        f_cur = walls.frame
+        flags = np.zeros(3, np.int64)
+        out = np.zeros(3, np.int64)
+        status = STATUS_OK
+        ran = 0
+        rebuilds = 0
+        worst_all = 0.0
+        t_halo = t_mig = 0.0
+        t_start = time.perf_counter()
+        inner.diag[4] = 0.0
+        inner.diag[5] = -1
+        for s in range(n):
+            if frames.shape[0] > 0:
+                f_cur[:] = frames[min(s, frames.shape[0] - 1)]
+            ctl, bodies, elems, pairs, wl, bnd = inner.records()
+            module.pre_force(dt, ctl._replace(n_owned=len(loc.bodies)), bodies, elems)
+            need = int(module.needs_rebuild(ctl, elems, bnd))
+            flags[0] = need < 0
+            flags[1] = need > 0
+            comm.Allreduce(flags, out, op=MPI.MAX)
+            if out[0]:
+                status = STATUS_NAN
+                break
+            if out[1]:
+                t0 = time.perf_counter()
+                self._migrate()
+                self._rebuild_local()
+                rebuilds += 1
+                t_mig += time.perf_counter() - t0
+                ctl, bodies, elems, pairs, wl, bnd = inner.records()
+            worst = module.compute_forces(dt, True, ctl, bodies, elems, pairs, wl, bnd,
+                                          inner.diag)
+            module.boundary_work(dt, bnd)
+            t0 = time.perf_counter()
+            self._halo()
+            t_halo += time.perf_counter() - t0
+            ran += 1
+            worst_all = max(worst_all, worst)
+            flags[2] = worst > loc.max_overlap
+            comm.Allreduce(flags[2:], out[2:], op=MPI.MAX)
+            if out[2]:
+                status = STATUS_OVERLAP
+                break
+        t_steps = time.perf_counter() - t_start
+        self._step_time = (t_steps - t_halo) / max(ran, 1)
+        t0 = time.perf_counter()
+        worst_e = self._gather()
+        self.timing = {"steps": ran, "steps_s": t_steps, "halo_s": t_halo,
+                       "migrate_s": t_mig, "gather_s": time.perf_counter() - t0,
+                       "owned": loc.n_owned, "ghosts": int(loc.bodies.ghosts)}
+        best = comm.allreduce((float(inner.diag[4]), self.rank), op=MPI.MAXLOC)
+        d = self.diag
+        d[4] = max(d[4], best[0])
+        d[5] = comm.bcast(worst_e, root=best[1])
+        d[1] = ran
+        return StepResult(ran, status, rebuilds, float(best[0]), int(d[5]))
+
+    def _rebuild_local(self) -> None:
+        """The rank's lists from its rows, the carried entries' history merged by pair;
+        ghosts' references are their owners' (same step, same positions)."""
+        self.inner.rebuild()
+
+    # ------------------------------------------------------------------ scatter
+    def _layer(self) -> float:
+        sim = self.sim
+        return 2.0 * float(sim.elements.radius.max()) + float(sim.skin)
+
+    def _body_extent(self, estart: np.ndarray, offset: np.ndarray,
+                     radius: np.ndarray) -> np.ndarray:
+        """Largest distance of a body's element surfaces from its centre, less r_max."""
+        if len(offset) == 0:
+            return np.zeros(len(estart) - 1)
+        reach = np.linalg.norm(offset, axis=1) + radius - radius.max()
+        return np.maximum.reduceat(reach, estart[:-1].clip(max=len(reach) - 1)) \
+            if len(estart) > 1 else np.zeros(0)
+
+    def _cut(self, pool_pos: np.ndarray, weight: np.ndarray) -> None:
+        """A new cut unless the current one is kept (after a host change, while the ranks'
+        step times stay within ``rebalance``)."""
+        if self.boxes is None:
+            self.boxes = dec.bisect(pool_pos, weight, self.ranks, self._layer())
+
+    def _scatter(self) -> None:
+        """Cut the domain (if due) and take this rank's rows from the whole host state."""
+        sim = self.sim
+        b, e = sim.bodies, sim.elements
+        c, wc = sim.contacts, sim.wall_contacts
+        nb = len(b)
+        pairs = Entries.of(c)
+        eb_i, eb_j = e.owner[pairs.i], e.owner[pairs.j]
+        weight = np.diff(b.element_start).astype(float)
+        weight += np.bincount(eb_i, minlength=nb) + np.bincount(eb_j, minlength=nb)
+        self._cut(b.position, weight)
+        owner = dec.owner_of(b.position, self.boxes)
+        # ghosts of rank k: every body with a listed partner owned by k, and every body
+        # within the ghost layer of k's box
+        P = self.ranks
+        ghost_on = np.zeros((P, nb), bool)
+        cross = owner[eb_i] != owner[eb_j]
+        ghost_on[owner[eb_i[cross]], eb_j[cross]] = True
+        ghost_on[owner[eb_j[cross]], eb_i[cross]] = True
+        reach = self._layer() + self._body_extent(b.element_start, e.offset, e.radius)
+        for k in range(P):
+            ghost_on[k] |= dec.distance_to_box(b.position, self.boxes[k]) <= reach
+        ghost_on[owner, np.arange(nb)] = False
+        pool = Pool.of(b, e, self.aux, self.vf, self.wf, c, wc)
+        self._place(pool, owner, ghost_on, b.id)
+        self._host_copy = tuple(np.array(a) for a in (
+            b.position, b.velocity, b.angular_velocity, b.orientation, b.mass))
+
+    def _place(self, pool: Pool, owner: np.ndarray, ghost_on: np.ndarray,
+               ids: np.ndarray) -> None:
+        """Assemble this rank's scene from ``pool``: owned rows (``owner`` == this rank)
+        in id order, then ghosts grouped by owner rank, each group in id order; and the
+        halo plan (which owned rows go to which rank, which ghost rows come from which)."""
+        me, P = self.rank, self.ranks
+        by_id = np.argsort(ids, kind="stable")
+        mine = by_id[owner[by_id] == me]
+        groups = []
+        ranges = {}
+        first = len(mine)
+        for s in range(P):
+            if s == me:
+                continue
+            g = by_id[(owner[by_id] == s) & ghost_on[me, by_id]]
+            if len(g):
+                ranges[s] = (first, len(g))
+                first += len(g)
+                groups.append(g)
+        ghosts = np.concatenate(groups) if groups else np.zeros(0, np.int64)
+        if self.local is None:
+            self.local = LocalScene(self.sim)
+            self.inner = CpuBackend(threads=self.threads, force_pass=self.force_pass)
+            self.inner.module = self.module
+        loc = self.local
+        loc.plan, loc.walls = self.sim.plan, self.sim.walls
+        aux, vf, wf = assemble(loc, pool, mine, ghosts)
+        if loc.plan.spheres_only:
+            from ..population import share_sphere_arrays
+
+            share_sphere_arrays(loc)
+        inner = self.inner
+        inner.sim = loc
+        inner.aux = aux
+        inner._scratch()
+        inner.vf[:] = vf
+        inner.wf[:] = wf
+        # the halo plan: owned rows (local index, id order) sent to each rank
+        sends = {}
+        for k in range(P):
+            if k != me:
+                rows = np.flatnonzero(ghost_on[k, mine])
+                if len(rows):
+                    sends[k] = rows.astype(np.int64)
+        self._sends = sends
+        self._recvs = ranges
+        self._owner_local = owner[mine]  # (all me)
+        self._ghost_on_local = ghost_on[:, mine]
+        width = STATE_WIDTH + aux.shape[1]
+        self._sbuf = {k: np.empty((len(r), width)) for k, r in sends.items()}
+        self._rbuf = {k: np.empty((cnt, width)) for k, (_, cnt) in ranges.items()}
+
+    # ------------------------------------------------------------------ halo
+    def _halo(self) -> None:
+        """Owners send their ghosts' state (after the post-force part) to the ranks that
+        hold them; ghosts take it."""
+        from mpi4py import MPI
+
+        loc, inner = self.local, self.inner
+        b = loc.bodies
+        reqs = []
+        for s, buf in self._rbuf.items():
+            reqs.append(self.comm.Irecv([buf, MPI.DOUBLE], source=s, tag=11))
+        for k, rows in self._sends.items():
+            buf = self._sbuf[k]
+            pack_state(rows, b.position, b.velocity, b.orientation, b.angular_velocity,
+                       b.force, b.torque, inner.vf, inner.wf, inner.aux, buf)
+            reqs.append(self.comm.Isend([buf, MPI.DOUBLE], dest=k, tag=11))
+        MPI.Request.Waitall(reqs)
+        for s, buf in self._rbuf.items():
+            first, _ = self._recvs[s]
+            unpack_state(first, buf, b.position, b.velocity, b.orientation,
+                         b.angular_velocity, b.force, b.torque, inner.vf, inner.wf,
+                         inner.aux)
+
+    # ------------------------------------------------------------------ migration
+    def _migrate(self) -> None:
+        """At a list rebuild: owned bodies whose centre left the box go to their new
+        owner with the history of the contacts they touch; the ghost layers are chosen
+        again (the old owner sends a migrant's ghost copies on its new owner's behalf)."""
+        loc, inner = self.local, self.inner
+        me, P = self.rank, self.ranks
+        b, e = loc.bodies, loc.elements
+        n_own = loc.n_owned
+        pos = b.position[:n_own]
+        new_owner = dec.owner_of(pos, self.boxes)
+        est = b.element_start
+        reach = self._layer() + self._body_extent(est[:n_own + 1], e.offset[:est[n_own]],
+                                                  e.radius[:est[n_own]])
+        near = np.zeros((P, n_own), bool)
+        for k in range(P):
+            near[k] = dec.distance_to_box(pos, self.boxes[k]) <= reach
+        near[new_owner, np.arange(n_own)] = False
+        pool = Pool.of(b, e, inner.aux, inner.vf, inner.wf, loc.contacts, loc.wall_contacts)
+        pairs_act = pool.pairs.where(pool.pairs.act != 0)
+        walls_act = pool.walls.where(pool.walls.act != 0)
+        ids = b.id
+        sub = np.arange(len(e.owner)) - est[e.owner]  # element index within its body
+        send = [None] * P
+        for k in range(P):
+            if k == me:
+                continue
+            rows = np.flatnonzero((new_owner == k) | near[k])
+            if not len(rows):
+                continue
+            msg = pool.rows_payload(rows)
+            msg["owner"] = new_owner[rows]
+            msg["near"] = near[:, rows]
+            mig = rows[new_owner[rows] == k]
+            if len(mig):
+                is_mig = np.zeros(len(b), bool)
+                is_mig[mig] = True
+                pm = pairs_act.where(is_mig[e.owner[pairs_act.i]]
+                                     | is_mig[e.owner[pairs_act.j]])
+                wm = walls_act.where(is_mig[e.owner[walls_act.i]])
+                msg["pairs"] = (ids[e.owner[pm.i]], sub[pm.i], ids[e.owner[pm.j]],
+                                sub[pm.j], pm.hist, pm.act)
+                msg["walls"] = (ids[e.owner[wm.i]], sub[wm.i], wm.j, wm.hist, wm.act)
+            send[k] = msg
+        recv = self.comm.alltoall(send)
+        # the pool: this rank's rows, then the rows received that it does not hold
+        top = max([int(ids.max()) if len(ids) else 0]
+                  + [int(m["bodies"]["id"].max()) for m in recv if m is not None]) + 1
+        have = np.zeros(top, bool)
+        have[ids] = True
+        extra = []
+        for msg in recv:
+            if msg is None:
+                continue
+            fresh = ~have[msg["bodies"]["id"]]
+            if np.any(fresh):
+                rows = np.flatnonzero(fresh)
+                part = {"bodies": {k: v[rows] for k, v in msg["bodies"].items()},
+                        "elements": None, "aux": msg["aux"][rows], "vf": msg["vf"][rows],
+                        "wf": msg["wf"][rows]}
+                est_m = np.concatenate([[0], np.cumsum(msg["counts"])])
+                er, counts = element_rows(est_m, rows)
+                part["counts"] = counts
+                part["elements"] = {k: v[er] for k, v in msg["elements"].items()}
+                extra.append(part)
+                have[part["bodies"]["id"]] = True
+        pool.extend(extra)
+        pids = pool.bodies["id"]
+        n_pool = len(pids)
+        row_of = np.full(top, -1, np.int64)
+        row_of[pids] = np.arange(n_pool)
+        owner = np.full(n_pool, -1, np.int64)
+        ghost_on = np.zeros((P, n_pool), bool)
+        owner[:n_own] = new_owner
+        ghost_on[:, :n_own] = near
+        migrants = []
+        shipped_p, shipped_w = [], []
+        for msg in recv:
+            if msg is None:
+                continue
+            r = row_of[msg["bodies"]["id"]]
+            owner[r] = msg["owner"]
+            ghost_on[:, r] |= msg["near"]
+            if "pairs" in msg:
+                migrants.append(r[msg["owner"] == me])
+                shipped_p.append(msg["pairs"])
+                shipped_w.append(msg["walls"])
+        # pool element index of (body id, element within the body)
+        pest = pool.estart
+
+        def elem(idv, subv):
+            rows = np.where(idv < top, row_of[np.minimum(idv, top - 1)], -1)
+            ok = rows >= 0
+            return np.where(ok, pest[np.maximum(rows, 0)] + subv, -1), ok
+
+        if migrants:
+            is_mig = np.zeros(n_pool, bool)
+            is_mig[np.concatenate(migrants)] = True
+            pown = np.repeat(np.arange(n_pool), np.diff(pest))
+            pp = pool.pairs
+            pool.pairs = pp.where(~(is_mig[pown[pp.i]] | is_mig[pown[pp.j]]))
+            pw = pool.walls
+            pool.walls = pw.where(~is_mig[pown[pw.i]])
+            width = pp.hist.shape[1]
+            new_p, new_w = [], []
+            for ia, sa, ib, sb, hist, act in shipped_p:
+                ea, oka = elem(ia, sa)
+                eb, okb = elem(ib, sb)
+                ok = oka & okb
+                new_p.append(Entries(ea[ok], eb[ok], hist[ok], act[ok]))
+            for ia, sa, key, hist, act in shipped_w:
+                ea, ok = elem(ia, sa)
+                new_w.append(Entries(ea[ok], key[ok].astype(np.int64), hist[ok], act[ok]))
+            # shipped entries first: the owner's history wins over a ghost copy's
+            pool.pairs = Entries.cat(new_p + [pool.pairs], width)
+            pool.walls = Entries.cat(new_w + [pool.walls], width)
+        # rows no rank needs here any more drop out (old ghosts not chosen again)
+        self._place(pool, owner, ghost_on, pids)
+
+    # ------------------------------------------------------------------ gather
+    def _gather(self) -> int:
+        """Every rank's owned rows (state, integrator rows, element references, contact
+        entries whose first element it owns) into the whole host state on every rank;
+        returns the host element of this rank's largest overlap (-1: none)."""
+        sim = self.sim
+        loc, inner = self.local, self.inner
+        b, e = loc.bodies, loc.elements
+        no = loc.n_owned
+        est = b.element_start
+        ne_own = int(est[no])
+        hb, he = sim.bodies, sim.elements
+        id_row = self._id_rows(hb.id)
+        grow_l = id_row[b.id]                              # host row of each local body
+        sub = np.arange(len(e.owner)) - est[e.owner]
+        gel = hb.element_start[grow_l[e.owner]] + sub      # host element of each element
+        pe = Entries.of(loc.contacts)
+        gi, gj = gel[pe.i], gel[pe.j]
+        first_local = np.where(gi < gj, pe.i, pe.j)
+        mine = first_local < ne_own
+        pe = pe.where(mine)
+        pe = Entries(gel[pe.i], gel[pe.j], pe.hist, pe.act)
+        we = Entries.of(loc.wall_contacts)
+        we = we.where(we.i < ne_own)
+        we = Entries(gel[we.i], we.j, we.hist, we.act)
+        msg = {"rows": grow_l[:no],
+               "state": [a[:no] for a in (b.position, b.velocity, b.orientation,
+                                          b.angular_velocity, b.force, b.torque)],
+               "aux": inner.aux[:no], "vf": inner.vf[:no], "wf": inner.wf[:no],
+               "erows": gel[:ne_own], "epos": e.position[:ne_own],
+               "eref": e.reference[:ne_own], "pairs": pe, "walls": we}
+        allm = self.comm.allgather(msg)
+        for m in allm:
+            r = m["rows"]
+            for name, a in zip(("position", "velocity", "orientation", "angular_velocity",
+                                "force", "torque"), m["state"], strict=True):
+                getattr(hb, name)[r] = a
+            self.aux[r] = m["aux"]
+            self.vf[r] = m["vf"]
+            self.wf[r] = m["wf"]
+            if not sim.plan.spheres_only:
+                he.position[m["erows"]] = m["epos"]
+            he.reference[m["erows"]] = m["eref"]
+        width = sim.contacts.history.shape[1]
+        pairs = Entries.cat([m["pairs"] for m in allm], width)
+        from .local import orient_pairs
+
+        pairs = orient_pairs(pairs, he.material, sim.plan)
+        set_entries(sim.contacts, len(he), pairs)
+        set_entries(sim.wall_contacts, len(he), Entries.cat([m["walls"] for m in allm],
+                                                             width))
+        # boundary loads (force, torque, work): the sum of every rank's owned elements
+        load = sim.walls.load
+        if load.size:
+            from mpi4py import MPI
+
+            total = np.empty_like(load)
+            self.comm.Allreduce(np.ascontiguousarray(load), total, op=MPI.SUM)
+            load[:] = total
+        self.diag[6] = int(np.count_nonzero(sim.contacts.active[:sim.contacts.count])
+                           + np.count_nonzero(sim.wall_contacts.active[
+                               :sim.wall_contacts.count]))
+        self._host_copy = tuple(np.array(a) for a in (
+            hb.position, hb.velocity, hb.angular_velocity, hb.orientation, hb.mass))
+        w = int(inner.diag[5])
+        return int(gel[w]) if 0 <= w < len(gel) else -1
+
+    def _id_rows(self, ids: np.ndarray) -> np.ndarray:
+        out = np.full(int(ids.max()) + 1 if len(ids) else 1, -1, np.int64)
+        out[ids] = np.arange(len(ids))
+        return out
+
+    # ------------------------------------------------------------------ reductions
+    def contact_count(self) -> int:
+        return int(self.diag[6])
+
+
+__all__ = ["MpiBackend"]
