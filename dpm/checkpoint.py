@@ -341,8 +341,29 @@ def restart(path: str | os.PathLike, scene: Simulation | None = None) -> Simulat
                 f"dpm.restart(): {str(p)!r} needs a class this process does not have "
                 f"({exc}); restart from the script (or with the plugin) that built the "
                 "scene") from None
+    sim.backend = backend_here(sim.backend)
     sim._restored(p)
     return sim
+
+
+def backend_here(backend: Any) -> Any:
+    """The backend a restored run takes where it runs now: a checkpoint holds the whole
+    scene, not the machine, so a run checkpointed on N ranks goes on on M ranks or on
+    one process. A CPU or MPI backend becomes the MPI backend under an MPI launcher with
+    several ranks and stays as it was otherwise (the MPI backend on one process is the
+    CPU backend); other backends are kept."""
+    from .backends.cpu import CpuBackend
+    from .parallel import launched_ranks
+    from .parallel.backend import MpiBackend
+
+    if launched_ranks() > 1 and type(backend) is CpuBackend:
+        mpi = MpiBackend(threads=backend.threads, force_pass=backend.force_pass)
+        for k in ("aux", "diag", "sort_every"):
+            setattr(mpi, k, getattr(backend, k))
+        return mpi
+    if isinstance(backend, MpiBackend):
+        backend._reset_local()
+    return backend
 
 
 def resume_output(sim: Simulation, state: dict[str, Any] | None) -> None:
@@ -356,6 +377,13 @@ def resume_output(sim: Simulation, state: dict[str, Any] | None) -> None:
         warnings.warn(f"dpm.restart(): the output file {str(path)!r} of the run is gone; "
                       "a new one is written from the restart on", stacklevel=3)
         sim._writer = None
+        return
+    if not getattr(sim.backend, "root", True):  # (MPI: rank 0 writes the file)
+        from .io.hdf5 import NullWriter
+
+        sim._writer = NullWriter(path, sim)
+        sim._writer.frames, sim._writer.removed = int(state["frames"]), int(state["removed"])
+        sim.last_output = sim._writer
         return
     sim._writer = Writer.resume(path, sim, int(state["frames"]), int(state["removed"]))
     sim.last_output = sim._writer

@@ -31,7 +31,13 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   carrying every contact's history by pair.
 - Boundary loads and work are summed over ranks (each counts its owned elements only).
 
-Refused with a clear error: periodic faces and implicit integrators (not yet).
+- Periodic faces: the kernels take the nearest image of a pair across a periodic face,
+  so a ghost is the body itself at its wrapped position, chosen by its nearest image's
+  distance from the box; a rank whose box touches both ends of a period needs no copy of
+  its own bodies (it is its own periodic neighbour through the nearest image).
+
+Refused with a clear error: implicit integrators (their Newton iterations would need
+messages inside the iteration; not yet).
 """
 
 from __future__ import annotations
@@ -46,6 +52,7 @@ from ..backends.cpu import CpuBackend
 from ..errors import ParameterError
 from ..kernels.halo import STATE_WIDTH, pack_state, unpack_state
 from . import decomposition as dec
+from . import launched_ranks
 from .local import Entries, LocalScene, Pool, assemble, element_rows, set_entries
 
 
@@ -58,8 +65,17 @@ class MpiBackend(CpuBackend):
     name = "mpi"
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
-                 rebalance: float = 1.1, comm: Any = None) -> None:
+                 rebalance: float = 1.1, boxes: Any = None, comm: Any = None) -> None:
         super().__init__(threads=threads, force_pass=force_pass)
+        if boxes is not None:
+            boxes = np.asarray(boxes, float)
+            if boxes.ndim != 3 or boxes.shape[1:] != (2, 3) or np.any(
+                    boxes[:, 0] >= boxes[:, 1]):
+                raise ParameterError(f"MpiBackend(): boxes of shape {boxes.shape}; allowed: "
+                                     "(ranks, 2, 3), lower corner below upper corner")
+        #: fixed sub-domains (one box per rank, together tiling space) instead of the
+        #: bisection: for tests and for scenes whose cut the user knows better
+        self.fixed_boxes = boxes
         if not (isinstance(rebalance, int | float) and rebalance >= 1.0):
             raise ParameterError(f"MpiBackend(): rebalance={rebalance!r}; allowed: a "
                                  "number >= 1 (largest over mean step time)")
@@ -94,10 +110,14 @@ class MpiBackend(CpuBackend):
 
     @property
     def ranks(self) -> int:
+        if self._comm is None and launched_ranks() == 1:
+            return 1  # (not under an MPI launcher: mpi4py is not imported)
         return int(self.comm.Get_size())
 
     @property
     def rank(self) -> int:
+        if self._comm is None and launched_ranks() == 1:
+            return 0
         return int(self.comm.Get_rank())
 
     @property
@@ -121,10 +141,6 @@ class MpiBackend(CpuBackend):
     # ------------------------------------------------------------------ host changes
     def attach(self, sim: Any) -> None:
         if self.ranks > 1:
-            if np.any(sim.period[3:] > 0):
-                raise ParameterError("Simulation(device='mpi'): periodic faces are not "
-                                     "supported across ranks yet; run this scene on one "
-                                     "process (device='cpu')")
             if sim.integrator.implicit:
                 raise ParameterError(f"Simulation(device='mpi'): the implicit "
                                      f"{sim.integrator.name} integrator is not supported "
@@ -261,8 +277,14 @@ class MpiBackend(CpuBackend):
     def _cut(self, pool_pos: np.ndarray, weight: np.ndarray) -> None:
         """A new cut unless the current one is kept (after a host change, while the ranks'
         step times stay within ``rebalance``)."""
-        if self.boxes is None:
+        if self.fixed_boxes is not None:
+            if len(self.fixed_boxes) != self.ranks:
+                raise ParameterError(f"MpiBackend(): {len(self.fixed_boxes)} boxes for "
+                                     f"{self.ranks} ranks; give one box per rank")
+            self.boxes = self.fixed_boxes
+        elif self.boxes is None:
             self.boxes = dec.bisect(pool_pos, weight, self.ranks, self._layer())
+        self.cost = weight
 
     def _scatter(self) -> None:
         """Cut the domain (if due) and take this rank's rows from the whole host state."""
@@ -285,7 +307,7 @@ class MpiBackend(CpuBackend):
         ghost_on[owner[eb_j[cross]], eb_i[cross]] = True
         reach = self._layer() + self._body_extent(b.element_start, e.offset, e.radius)
         for k in range(P):
-            ghost_on[k] |= dec.distance_to_box(b.position, self.boxes[k]) <= reach
+            ghost_on[k] |= dec.distance_to_box(b.position, self.boxes[k], sim.period) <= reach
         ghost_on[owner, np.arange(nb)] = False
         pool = Pool.of(b, e, self.aux, self.vf, self.wf, c, wc)
         self._place(pool, owner, ghost_on, b.id)
@@ -383,7 +405,7 @@ class MpiBackend(CpuBackend):
                                                   e.radius[:est[n_own]])
         near = np.zeros((P, n_own), bool)
         for k in range(P):
-            near[k] = dec.distance_to_box(pos, self.boxes[k]) <= reach
+            near[k] = dec.distance_to_box(pos, self.boxes[k], self.sim.period) <= reach
         near[new_owner, np.arange(n_own)] = False
         pool = Pool.of(b, e, inner.aux, inner.vf, inner.wf, loc.contacts, loc.wall_contacts)
         pairs_act = pool.pairs.where(pool.pairs.act != 0)

@@ -69,10 +69,22 @@ def owner_of(points: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     return out
 
 
-def distance_to_box(points: np.ndarray, box: np.ndarray) -> np.ndarray:
-    """Distance of each point from the box (0 inside)."""
+def distance_to_box(points: np.ndarray, box: np.ndarray,
+                    period: np.ndarray | None = None) -> np.ndarray:
+    """Distance of each point from the box (0 inside); along a periodic axis
+    (``period[3 + d]`` > 0, the layout of ``Simulation.period``) the nearest image of
+    the point counts."""
     lo, hi = box
     d = np.maximum(np.maximum(lo - points, points - hi), 0.0)
+    if period is not None:
+        for ax in range(3):
+            length = period[3 + ax]
+            if length > 0:
+                x = points[:, ax]
+                for shift in (-length, length):
+                    xs = x + shift
+                    d[:, ax] = np.minimum(d[:, ax], np.maximum(np.maximum(
+                        lo[ax] - xs, xs - hi[ax]), 0.0))
     return np.sqrt(np.einsum("ij,ij->i", d, d))
 
 

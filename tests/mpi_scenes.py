@@ -1,0 +1,248 @@
+"""Scenes run on several MPI ranks and on one process, for ``tests/test_mpi.py``.
+
+    mpiexec -n 2 python tests/mpi_scenes.py SCENE OUT.npz [--checkpoint STEP PATH]
+    python tests/mpi_scenes.py SCENE OUT.npz --device cpu
+    mpiexec -n 3 python tests/mpi_scenes.py SCENE OUT.npz --restart PATH
+
+Rank 0 writes the end state by body id (position, velocity, angular velocity,
+orientation), the boundary loads, the outlet records and, per call, each rank's owned
+bodies and step time. Every scene uses Hertz-Mindlin and velocity Verlet (the step modules
+the rest of the suite compiles).
+
+Scenes:
+
+- ``settle``: 400 spheres falling into a box with a tilted wall (the cut found by the
+  bisection; bodies cross the cut as they fall and settle).
+- ``corner``: a cube cluster resting across the corner where the sub-domains meet
+  (fixed boxes: x = 0 on 2 ranks, x = 0 and y = 0 on 3 and 4), pressed by spheres.
+- ``slide``: a spinning sphere sliding obliquely on the floor across x = 0, and two
+  spheres in a sliding contact crossing x = 0 together (history of a boundary contact
+  and of a pair carried by migration).
+- ``flow``: periodic along x (the cut axis), an inlet, an outlet: count balance.
+- ``gather``: spheres pulled into one corner of a box by a slanted gravity: the cut
+  follows them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import dpm
+from dpm.parallel import launched_ranks
+
+G = 9.81
+
+
+def _materials():
+    glass = dpm.Material("glass", density=2500.0, young=5e6, poisson=0.45)
+    steel = dpm.Material("steel", density=7800.0, young=2e7, poisson=0.3)
+    return glass, steel
+
+
+def _sim(device, dt=1e-5, gravity=(0.0, 0.0, -G)) -> tuple[dpm.Simulation, object, object]:
+    sim = dpm.Simulation(dt=dt, gravity=gravity, device=device)
+    glass, steel = _materials()
+    sim.contact(glass, glass, model="hertz_mindlin", restitution=0.5, friction=0.5)
+    sim.contact(glass, steel, model="hertz_mindlin", restitution=0.4, friction=0.4)
+    return sim, glass, steel
+
+
+def fixed_boxes(ranks: int) -> np.ndarray:
+    """Sub-domains meeting at the origin: x = 0 (2 ranks), then y = 0 (3, 4 ranks)."""
+    inf = np.inf
+    if ranks == 2:
+        return np.array([[[-inf, -inf, -inf], [0, inf, inf]],
+                         [[0, -inf, -inf], [inf, inf, inf]]])
+    if ranks == 3:
+        return np.array([[[-inf, -inf, -inf], [0, inf, inf]],
+                         [[0, -inf, -inf], [inf, 0, inf]],
+                         [[0, 0, -inf], [inf, inf, inf]]])
+    if ranks == 4:
+        return np.array([[[-inf, -inf, -inf], [0, 0, inf]],
+                         [[-inf, 0, -inf], [0, inf, inf]],
+                         [[0, -inf, -inf], [inf, 0, inf]],
+                         [[0, 0, -inf], [inf, inf, inf]]])
+    raise SystemExit(f"fixed boxes for 2-4 ranks, not {ranks}")
+
+
+def device(kind: str, fixed: bool, **kw):
+    if kind == "cpu":
+        return "cpu"
+    from dpm.parallel.backend import MpiBackend
+
+    n = launched_ranks()
+    return MpiBackend(boxes=fixed_boxes(n) if fixed and n > 1 else None, **kw)
+
+
+def settle(kind: str):
+    sim, glass, steel = _sim(device(kind, False))
+    sim.add_boundary("box", material=steel, lower=(0, 0, 0), upper=(0.03, 0.02, 0.04))
+    sim.add_boundary("wall", material=steel, center=(0.008, 0.01, 0.012),
+                     normal=(0.24, 0.0, 0.97), u=(0.97, 0.0, -0.24),
+                     half_extents=(0.006, 0.008), thickness=1e-3)
+    rng = np.random.default_rng(1)
+    xyz = dpm.lattice((0.001, 0.001, 0.004), (0.029, 0.019, 0.03), 2.3e-3, jitter=5e-5,
+                      seed=2)
+    n = np.array([0.24, 0.0, 0.97]) / np.hypot(0.24, 0.97)
+    clear = np.abs((xyz - [0.008, 0.01, 0.012]) @ n) > 2.2e-3  # (not inside the wall)
+    xyz = xyz[clear | (xyz[:, 0] > 0.0155)][:400]
+    sim.add_particles("sphere", material=glass, positions=xyz,
+                      velocities=rng.uniform(-0.3, 0.3, xyz.shape),
+                      angular_velocities=rng.uniform(-50, 50, xyz.shape),
+                      radius=rng.uniform(0.85e-3, 1e-3, len(xyz)))
+    return sim, 800
+
+
+def corner(kind: str):
+    sim, glass, steel = _sim(device(kind, True))
+    sim.add_boundary("plane", material=steel, point=(0, 0, 0), normal=(0, 0, 1))
+    # the cube (edge 4 mm, centre near the corner) just above the floor
+    sim.add_particles("cube", material=glass, positions=[[1e-4, -2e-4, 2.1e-3]],
+                      angular_velocities=[[3.0, -2.0, 5.0]], a=2e-3)
+    rng = np.random.default_rng(3)
+    # spheres above and beside it, falling on it from every quadrant
+    xy = np.array([[x, y] for x in (-3e-3, -1e-3, 1e-3, 3e-3) for y in (-3e-3, -1e-3, 1e-3,
+                                                                       3e-3)])
+    top = np.c_[xy, np.full(len(xy), 5.2e-3)]
+    ring = np.array([[4.5e-3 * np.cos(a), 4.5e-3 * np.sin(a), 1.0e-3]
+                     for a in np.linspace(0, 2 * np.pi, 8, endpoint=False)])
+    pos = np.r_[top, ring]
+    sim.add_particles("sphere", material=glass, positions=pos, radius=0.95e-3,
+                      velocities=rng.uniform(-0.05, 0.05, pos.shape)
+                      + np.r_[np.tile([0, 0, -0.3], (len(top), 1)),
+                              -0.2 * ring / np.linalg.norm(ring, axis=1)[:, None]])
+    return sim, 1200
+
+
+def slide(kind: str):
+    sim, glass, steel = _sim(device(kind, True))
+    sim.add_boundary("plane", material=steel, point=(0, 0, 0), normal=(0, 0, 1))
+    r = 1e-3
+    # a sphere sliding and spinning across x = 0 at 30 degrees to the face
+    v = 0.4 * np.array([np.cos(np.pi / 6), np.sin(np.pi / 6), 0.0])
+    sim.add_particles("sphere", material=glass, positions=[[-2.5e-3, -5e-3, r - 1e-6]],
+                      velocities=[v], angular_velocities=[[40.0, -90.0, 25.0]], radius=r)
+    # two spheres pressed together (gravity + approach), sliding against each other
+    # while they cross x = 0
+    sim.add_particles("sphere", material=glass,
+                      positions=[[-2.0e-3, 6e-3, r - 1e-6], [-2.0e-3 + 1e-3, 6e-3 + 1.7263e-3,
+                                                              r - 1e-6]],
+                      velocities=[[0.3, 0.05, 0.0], [0.36, -0.08, 0.0]],
+                      angular_velocities=[[0.0, 0.0, 80.0], [0.0, 0.0, -60.0]], radius=r)
+    return sim, 1500
+
+
+def flow(kind: str):
+    sim, glass, steel = _sim(device(kind, False))
+    sim.add_boundary("plane", material=steel, point=(0, 0, 0), normal=(0, 0, 1))
+    sim.set_periodic("x", 0.0, 0.03)
+    rng = np.random.default_rng(8)
+    xyz = dpm.lattice((0, 0, 0), (0.03, 0.012, 0.0066), 2.2e-3, jitter=5e-5, seed=9)
+    v = rng.uniform(-0.3, 0.3, xyz.shape)
+    v[:, 0] += 0.8  # a drift across the periodic faces
+    sim.add_particles("sphere", material=glass, positions=xyz, velocities=v,
+                      radius=rng.uniform(0.85e-3, 1e-3, len(xyz)))
+    sim.add_boundary("plane", material=steel, point=(0, 0, 0), normal=(0, 1, 0))
+    sim.add_boundary("plane", material=steel, point=(0, 0.012, 0), normal=(0, -1, 0))
+    sim.add_inlet(dpm.BoxRegion((0, 0, 0.009), (0.03, 0.012, 0.016)), glass, rate=12000.0,
+                  radius=(0.8e-3, 1.1e-3), velocity=(0.3, 0.1, -0.8), every=2.5e-4,
+                  stop=3e-3, seed=10)
+    sim.add_outlet(dpm.BoxRegion((0.0, -1.0, -1.0), (0.008, 1.0, 0.0012)), every=2.5e-4)
+    return sim, 600
+
+
+def gather(kind: str, rebalance: float = 1.1):
+    g = 9.81 * np.array([-1.0, -1.0, -0.3])
+    sim = dpm.Simulation(dt=1e-5, gravity=tuple(g), device=device(kind, False,
+                                                                     rebalance=rebalance)
+                         if kind != "cpu" else "cpu")
+    glass, steel = _materials()
+    sim.contact(glass, glass, model="hertz_mindlin", restitution=0.3, friction=0.3)
+    sim.contact(glass, steel, model="hertz_mindlin", restitution=0.3, friction=0.3)
+    sim.add_boundary("box", material=steel, lower=(0, 0, 0), upper=(0.04, 0.04, 0.02))
+    xyz = dpm.lattice((0.001, 0.001, 0.001), (0.039, 0.039, 0.008), 2.4e-3, jitter=5e-5,
+                      seed=4)
+    sim.add_particles("sphere", material=glass, positions=xyz, radius=1e-3)
+    return sim, 8000
+
+
+SCENES = {"settle": settle, "corner": corner, "slide": slide, "flow": flow,
+          "gather": gather}
+
+
+def state(sim: dpm.Simulation) -> dict[str, np.ndarray]:
+    b = sim.bodies
+    o = np.argsort(b.id, kind="stable")
+    out = {"id": b.id[o], "position": b.position[o], "velocity": b.velocity[o],
+           "angular_velocity": b.angular_velocity[o], "orientation": b.orientation[o],
+           "boundary_force": np.array([bd.force for bd in sim.boundaries]),
+           "boundary_torque": np.array([bd.torque for bd in sim.boundaries]),
+           "boundary_work": np.array([bd.work for bd in sim.boundaries]),
+           "time": np.array(sim.time), "steps": np.array(sim.step_count)}
+    removed = [o.records for o in sim.outlets] if sim.outlets else []
+    out["removed_ids"] = (np.sort(np.concatenate([r["id"] for r in removed]))
+                          if removed else np.zeros(0, np.int64))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("scene", choices=list(SCENES))
+    ap.add_argument("out")
+    ap.add_argument("--device", default="mpi", choices=("mpi", "cpu"))
+    ap.add_argument("--checkpoint", nargs=2, metavar=("STEP", "PATH"), default=None)
+    ap.add_argument("--restart", metavar="PATH", default=None)
+    ap.add_argument("--rebalance", type=float, default=1.1)
+    ap.add_argument("--output", default=None, help="also write the run to this HDF5 file")
+    ap.add_argument("--calls", type=int, default=8, help="run the steps in this many calls")
+    args = ap.parse_args(argv)
+    if args.restart:
+        sim = dpm.restart(args.restart)
+        steps = int(SCENES[args.scene](args.device)[1]) - sim.step_count \
+            if args.scene != "gather" else 8000 - sim.step_count
+    else:
+        if args.scene == "gather" and args.device == "mpi":
+            sim, steps = gather("mpi", args.rebalance)
+        else:
+            sim, steps = SCENES[args.scene](args.device)
+        if args.output:
+            sim.output(args.output, every_steps=max(1, steps // 4), overwrite=True)
+    per_call = []
+    done = 0
+    chunk = max(1, steps // args.calls)
+    t0 = time.perf_counter()
+    while done < steps:
+        k = min(chunk, steps - done)
+        if args.checkpoint and done < int(args.checkpoint[0]) <= done + k:
+            k = int(args.checkpoint[0]) - done
+        sim.run(steps=k, progress=False)
+        done += k
+        if args.checkpoint and sim.step_count == int(args.checkpoint[0]):
+            sim.checkpoint(args.checkpoint[1])
+        t = getattr(sim.backend, "timing", {}) or {}
+        if launched_ranks() > 1:
+            from mpi4py import MPI
+
+            rows = MPI.COMM_WORLD.allgather([t.get("owned", len(sim.bodies)),
+                                             t.get("steps_s", 0.0), t.get("halo_s", 0.0)])
+            per_call.append(rows)
+    wall = time.perf_counter() - t0
+    res = state(sim)
+    res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 3))
+    res["wall_s"] = np.array(wall)
+    sim.close()
+    if dpm.parallel.rank() == 0:
+        np.savez(args.out, **res)
+        print(f"{args.scene}: {len(res['id'])} bodies, {sim.step_count} steps, "
+              f"{wall:.1f} s on {launched_ranks()} rank(s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(Path(__file__).parent))
+    sys.exit(main())
