@@ -70,9 +70,11 @@ def fixed_boxes(ranks: int) -> np.ndarray:
     raise SystemExit(f"fixed boxes for 2-4 ranks, not {ranks}")
 
 
-def device(kind: str, fixed: bool, **kw):
-    if kind == "cpu":
-        return "cpu"
+def device(kind: str | None, fixed: bool, **kw):
+    """"cpu", the MPI backend (fixed boxes where the scene says), or None: the default
+    for where the script runs."""
+    if kind in ("cpu", None):
+        return kind
     from dpm.parallel.backend import MpiBackend
 
     n = launched_ranks()

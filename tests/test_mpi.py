@@ -1,0 +1,220 @@
+"""The MPI backend (``dpm.parallel``): the same scenes on 2, 3 and 4 ranks (4
+oversubscribed) against one process, under ``mpiexec`` (scenes in ``tests/mpi_scenes.py``).
+
+- the same trajectories to round-off (every body by id: position, velocity, angular
+  velocity, orientation; boundary force, torque and work; the outlet's records), with no
+  body lost or duplicated while bodies cross faces, edges, the corner where three and four
+  sub-domains meet, and periodic faces;
+- a cube cluster straddling that corner feels the serial force;
+- contact history survives migration: a spinning sphere sliding obliquely across a face
+  and two spheres in a sliding contact crossing it together end as in serial;
+- a checkpoint of a 2-rank run restarts on 3 ranks and on one process and ends as the
+  uninterrupted serial run; the 2-rank output file is one file in the serial layout;
+- load balance: bodies pulled into one corner keep the ranks' shares within 25 % of the
+  mean (without re-cutting they drift to 90/10);
+- the backend contract scenes (``tests/backend_contract.py``) pass on 2 ranks;
+- a serial run never imports mpi4py; unsupported requests are refused by name.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dpm
+
+HERE = Path(__file__).parent
+DRIVER = HERE / "mpi_scenes.py"
+sys.path.insert(0, str(HERE))
+import mpi_scenes  # noqa: E402
+
+
+def _mpiexec() -> str | None:
+    beside = Path(sys.executable).parent / "mpiexec"
+    if beside.exists():
+        return str(beside)
+    return shutil.which("mpiexec")
+
+
+MPIEXEC = _mpiexec()
+try:
+    import mpi4py  # noqa: F401
+
+    HAVE_MPI4PY = True
+except ImportError:
+    HAVE_MPI4PY = False
+needs_mpi = pytest.mark.skipif(MPIEXEC is None or not HAVE_MPI4PY,
+                               reason="needs mpiexec and mpi4py (pip install 'dpm[mpi]')")
+
+STATE = ("position", "velocity", "angular_velocity", "orientation")
+LOADS = ("boundary_force", "boundary_torque", "boundary_work")
+_SERIAL: dict[str, dict] = {}
+
+
+def _env() -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items()
+           if not k.startswith(("OMPI_", "PMI_", "PMIX_", "PRTE_"))}
+    env["NUMBA_NUM_THREADS"] = "1"
+    env["PYTHONPATH"] = os.pathsep.join(
+        [str(HERE.parent)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
+    return env
+
+
+def mpirun(n: int, *args: str, script: Path = DRIVER, timeout: float = 900) -> str:
+    cmd = [MPIEXEC, "--allow-run-as-root", "--oversubscribe", "-n", str(n),
+           sys.executable, str(script), *args]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=_env())
+    assert p.returncode == 0, f"{' '.join(cmd)} failed:\n{p.stdout[-3000:]}\n{p.stderr[-3000:]}"
+    return p.stdout
+
+
+def parallel(scene: str, n: int, tmp: Path, *extra: str) -> dict:
+    out = tmp / f"{scene}-{n}.npz"
+    mpirun(n, scene, str(out), *extra)
+    return dict(np.load(out))
+
+
+def serial(scene: str) -> dict:
+    """The end state of ``scene`` on one process (once per session)."""
+    if scene not in _SERIAL:
+        sim, steps = mpi_scenes.SCENES[scene]("cpu")
+        chunk = max(1, steps // 8)  # (the driver's calls)
+        while sim.step_count < steps:
+            sim.run(steps=min(chunk, steps - sim.step_count), progress=False)
+        _SERIAL[scene] = mpi_scenes.state(sim)
+    return _SERIAL[scene]
+
+
+def assert_same(ref: dict, got: dict, tol: float = 1e-10) -> None:
+    np.testing.assert_array_equal(got["id"], ref["id"])  # none lost, none duplicated
+    assert len(np.unique(got["id"])) == len(got["id"])
+    np.testing.assert_array_equal(got["removed_ids"], ref["removed_ids"])
+    for k in STATE + LOADS:
+        scale = max(float(np.abs(ref[k]).max()), 1e-300)
+        err = float(np.abs(got[k] - ref[k]).max()) / scale
+        assert err < tol, f"{k}: {err:.3g} of its scale (tolerance {tol:g})"
+
+
+@needs_mpi
+@pytest.mark.parametrize("scene,ranks", [("settle", 2), ("settle", 3), ("corner", 2),
+                                         ("corner", 3), ("corner", 4), ("slide", 2),
+                                         ("slide", 3), ("flow", 2)])
+def test_same_trajectories_as_one_process(scene, ranks, tmp_path):
+    got = parallel(scene, ranks, tmp_path)
+    assert_same(serial(scene), got)
+    owned = got["per_call"][:, :, 0]
+    assert owned.shape[1] == ranks
+    if scene != "flow":  # (an inlet and an outlet change the count)
+        assert np.all(owned.sum(axis=1) == len(got["id"]))
+    if scene in ("settle", "corner"):  # the work was shared
+        assert np.all(owned[-1] > 0), owned
+    if scene == "slide":  # the bodies started on rank 0 and crossed x = 0
+        assert owned[0, 0] == 3 and owned[-1, 0] == 0, owned
+
+
+@needs_mpi
+def test_checkpoint_restarts_on_other_rank_counts(tmp_path):
+    ck, run = tmp_path / "ck.h5", tmp_path / "run.h5"
+    first = parallel("settle", 2, tmp_path, "--checkpoint", "400", str(ck),
+                     "--output", str(run))
+    ref = serial("settle")
+    assert_same(ref, first)
+    on3 = parallel("settle", 3, tmp_path, "--restart", str(ck))
+    assert_same(ref, on3)
+    out1 = tmp_path / "on1.npz"
+    p = subprocess.run([sys.executable, str(DRIVER), "settle", str(out1), "--restart",
+                        str(ck), "--device", "cpu"], capture_output=True, text=True,
+                       env=_env(), timeout=600)
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert_same(ref, dict(np.load(out1)))
+    # one output file, the serial layout: frames at 0, 200, ..., 800 steps
+    r = dpm.load(run)
+    assert len(r) == 5
+    last = r.frame(4)
+    o = np.argsort(last["id"])
+    np.testing.assert_allclose(last["position"][o], first["position"], rtol=0, atol=1e-15)
+    assert sorted(p.name for p in tmp_path.glob("run*")) == ["run.h5", "run.xdmf"]
+
+
+@needs_mpi
+def test_load_balance_follows_the_bodies(tmp_path):
+    kept = parallel("gather", 2, tmp_path, "--rebalance", "1e9")
+    owned = kept["per_call"][:, :, 0]
+    assert owned[-1].max() / owned[-1].mean() > 1.5, owned  # the scene does unbalance
+    got = parallel("gather", 2, tmp_path)
+    owned = got["per_call"][:, :, 0]
+    share = owned.max(axis=1) / owned.mean(axis=1)
+    assert np.all(share[1:] < 1.25), owned
+
+
+@needs_mpi
+def test_backend_contract_on_two_ranks():
+    out = mpirun(2, "--backend", '{"device": "mpi"}', script=HERE / "backend_contract.py",
+                 timeout=1500)
+    assert out.count(": ok") >= 2 * 3, out  # (each rank prints each scene)
+
+
+def test_serial_run_never_imports_mpi4py():
+    code = ("import sys\n"
+            f"sys.path.insert(0, {str(HERE)!r})\n"
+            "import mpi_scenes\n"
+            "sim, _ = mpi_scenes.slide(None)\n"
+            "sim.run(steps=2, progress=False)\n"
+            "assert type(sim.backend).__name__ == 'CpuBackend'\n"
+            "assert 'mpi4py' not in sys.modules, 'mpi4py imported'\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       env=_env(), timeout=600)
+    assert p.returncode == 0, p.stderr[-3000:]
+
+
+def test_bad_requests_are_named():
+    from dpm.parallel.backend import MpiBackend
+
+    with pytest.raises(dpm.ParameterError, match="boxes"):
+        MpiBackend(boxes=np.zeros((2, 3)))
+    with pytest.raises(dpm.ParameterError, match="rebalance"):
+        MpiBackend(rebalance=0.5)
+
+
+def test_one_rank_is_the_cpu_backend():
+    """Outside a launcher the MPI backend steps as the CPU backend, bit for bit."""
+    from dpm.parallel.backend import MpiBackend
+
+    ref = mpi_scenes.state(_run_slide("cpu"))
+    got = mpi_scenes.state(_run_slide(MpiBackend()))
+    for k in STATE:
+        np.testing.assert_array_equal(got[k], ref[k])
+
+
+def _run_slide(device) -> dpm.Simulation:
+    sim, steps = mpi_scenes.slide("cpu")
+    sim.backend = device if not isinstance(device, str) else sim.backend
+    sim.run(steps=300, progress=False)
+    return sim
+
+
+class _TwoRanks:
+    """A stand-in communicator of two ranks (for refusals made before any message)."""
+
+    def Get_size(self) -> int:  # noqa: N802  (mpi4py's names)
+        return 2
+
+    def Get_rank(self) -> int:  # noqa: N802
+        return 0
+
+
+def test_implicit_integrator_refused_across_ranks():
+    from dpm.parallel.backend import MpiBackend
+
+    sim = dpm.Simulation(dt=1e-5, integrator="numerov", device=MpiBackend(comm=_TwoRanks()))
+    m = dpm.Material("m", density=1000, young=1e6, poisson=0.3)
+    sim.contact(m, m, model="hertz_mindlin", restitution=0.5, friction=0.5)
+    sim.add_particles("sphere", material=m, radius=1e-3, positions=[[0, 0, 0]])
+    with pytest.raises(dpm.ParameterError, match="numerov.*not supported across ranks"):
+        sim.run(steps=1, progress=False)
