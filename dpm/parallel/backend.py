@@ -82,9 +82,12 @@ class MpiBackend(CpuBackend):
         self.rebalance = float(rebalance)
         self._comm = comm
         self._reset_local()
-        #: per-call figures of the last call: steps, compute, halo and migration seconds,
-        #: ghosts, owned bodies (this rank)
+        #: figures of the last call on this rank: steps, seconds stepping (all of it), in
+        #: the halo exchange (waits included), migrating at rebuilds, gathering at the end,
+        #: scattering at the start; owned bodies and ghosts; halo bytes sent per step
         self.timing: dict[str, float] = {}
+        #: the same figures summed over the calls (``reset_totals()`` starts again)
+        self.totals: dict[str, float] = {}
 
     def _reset_local(self) -> None:
         self.local: LocalScene | None = None
@@ -190,15 +193,15 @@ class MpiBackend(CpuBackend):
         # drifted apart by more than ``rebalance``
         times = comm.allgather(self._step_time)
         same = comm.allreduce(int(self._host_unchanged()), op=MPI.MIN)
+        t_scatter = time.perf_counter()
         if not same or dec.imbalance(times) > self.rebalance:
             if same:
                 self.boxes = None
             self._scatter()
+        t_scatter = time.perf_counter() - t_scatter
         inner, loc = self.inner, self.local
         module = self.module
         inner.module = module
-        walls = self.sim.walls
-        f_cur = walls.frame
         flags = np.zeros(3, np.int64)
         out = np.zeros(3, np.int64)
         status = STATUS_OK
@@ -209,12 +212,13 @@ class MpiBackend(CpuBackend):
         t_start = time.perf_counter()
         inner.diag[4] = 0.0
         inner.diag[5] = -1
+        rec = None
         for s in range(n):
-            if frames.shape[0] > 0:
-                f_cur[:] = frames[min(s, frames.shape[0] - 1)]
-            ctl, bodies, elems, pairs, wl, bnd = inner.records()
-            module.pre_force(dt, ctl._replace(n_owned=len(loc.bodies)), bodies, elems)
-            need = int(module.needs_rebuild(ctl, elems, bnd))
+            if rec is None:  # (the records hold the arrays: new ones after a rebuild)
+                rec = inner.records()
+                ctl, bodies, elems, pairs, wl, bnd = rec
+                ctl_all = ctl._replace(n_owned=len(loc.bodies))
+            need = int(module.ranked_pre_force(dt, ctl_all, bodies, elems, bnd, frames, s))
             flags[0] = need < 0
             flags[1] = need > 0
             comm.Allreduce(flags, out, op=MPI.MAX)
@@ -227,10 +231,10 @@ class MpiBackend(CpuBackend):
                 self._rebuild_local()
                 rebuilds += 1
                 t_mig += time.perf_counter() - t0
-                ctl, bodies, elems, pairs, wl, bnd = inner.records()
-            worst = module.compute_forces(dt, True, ctl, bodies, elems, pairs, wl, bnd,
-                                          inner.diag)
-            module.boundary_work(dt, bnd)
+                rec = inner.records()
+                ctl, bodies, elems, pairs, wl, bnd = rec
+                ctl_all = ctl._replace(n_owned=len(loc.bodies))
+            worst = module.ranked_forces(dt, ctl, bodies, elems, pairs, wl, bnd, inner.diag)
             t0 = time.perf_counter()
             self._halo()
             t_halo += time.perf_counter() - t0
@@ -247,7 +251,12 @@ class MpiBackend(CpuBackend):
         worst_e = self._gather()
         self.timing = {"steps": ran, "steps_s": t_steps, "halo_s": t_halo,
                        "migrate_s": t_mig, "gather_s": time.perf_counter() - t0,
-                       "owned": loc.n_owned, "ghosts": int(loc.bodies.ghosts)}
+                       "scatter_s": t_scatter, "owned": loc.n_owned,
+                       "ghosts": int(loc.bodies.ghosts),
+                       "halo_bytes_per_step": float(sum(b.nbytes
+                                                        for b in self._sbuf.values()))}
+        for k in ("steps", "steps_s", "halo_s", "migrate_s", "gather_s", "scatter_s"):
+            self.totals[k] = self.totals.get(k, 0.0) + self.timing[k]
         best = comm.allreduce((float(inner.diag[4]), self.rank), op=MPI.MAXLOC)
         d = self.diag
         d[4] = max(d[4], best[0])
