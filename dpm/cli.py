@@ -12,6 +12,14 @@ from pathlib import Path
 from .errors import DpmError, ParameterError
 
 
+def say(text: str) -> None:
+    """Print (on rank 0 only under MPI: every rank runs the same command)."""
+    from .parallel import rank
+
+    if rank() == 0:
+        print(text)
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from .io.scene import load_scene
 
@@ -21,7 +29,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         from .checkpoint import restart
 
         sim = restart(args.restart, scene=scene)
-        print(f"restarted from step {sim.step_count} (t = {sim.time:.6g} s)")
+        say(f"restarted from step {sim.step_count} (t = {sim.time:.6g} s)")
     else:
         try:
             sim, run_kw = load_scene(args.scene, overwrite=True if args.overwrite else None)
@@ -47,11 +55,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         sim.close()
     wall = time.perf_counter() - t0
     n = len(sim.bodies)
-    print(f"{sim.step_count} steps, t = {sim.time:.6g} s, {n} particles, {wall:.1f} s wall "
-          f"({n * sim.step_count / max(wall, 1e-9):.3g} particle-steps/s incl. compile)")
+    say(f"{sim.step_count} steps, t = {sim.time:.6g} s, {n} particles, {wall:.1f} s wall "
+        f"({n * sim.step_count / max(wall, 1e-9):.3g} particle-steps/s incl. compile)")
     w = sim.last_output
     if w is not None:
-        print(f"output: {w.path} ({w.frames} frames) + {w.path.with_suffix('.xdmf').name}")
+        say(f"output: {w.path} ({w.frames} frames) + {w.path.with_suffix('.xdmf').name}")
     return 0
 
 

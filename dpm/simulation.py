@@ -569,7 +569,9 @@ class Simulation:
         appending = (w is not None and not w.closed
                      and os.path.realpath(w.path) == target)
         if not appending:
-            check_output_path(name, bool(overwrite))
+            # (MPI: rank 0 creates the file, maybe before another rank gets here)
+            check_output_path(name, bool(overwrite) or not getattr(self.backend, "root",
+                                                                   True))
             self.close()
             self._output_path = name
             self._output_overwrite = bool(overwrite)

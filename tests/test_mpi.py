@@ -218,3 +218,27 @@ def test_implicit_integrator_refused_across_ranks():
     sim.add_particles("sphere", material=m, radius=1e-3, positions=[[0, 0, 0]])
     with pytest.raises(dpm.ParameterError, match="numerov.*not supported across ranks"):
         sim.run(steps=1, progress=False)
+
+
+@needs_mpi
+def test_dpm_run_scene_file_under_mpiexec(tmp_path):
+    """``mpiexec -n 2 dpm run scene.toml``: one summary, one output file, the serial
+    trajectory."""
+    scene = HERE.parent / "examples" / "box_settle.toml"
+    args = ["run", str(scene), "--steps", "1100", "--no-progress", "--overwrite"]
+    par, ser = tmp_path / "par", tmp_path / "ser"
+    par.mkdir()
+    ser.mkdir()
+    cmd = [MPIEXEC, "--allow-run-as-root", "--oversubscribe", "-n", "2", sys.executable,
+           "-m", "dpm.cli", *args]
+    p = subprocess.run(cmd, cwd=par, capture_output=True, text=True, env=_env(), timeout=900)
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert p.stdout.count("1100 steps") == 1, p.stdout
+    q = subprocess.run([sys.executable, "-m", "dpm.cli", *args], cwd=ser, capture_output=True,
+                       text=True, env=_env(), timeout=900)
+    assert q.returncode == 0, q.stderr[-3000:]
+    a, b = dpm.load(par / "box_settle_toml.h5"), dpm.load(ser / "box_settle_toml.h5")
+    assert len(a) == len(b) == 2  # (steps 0 and 1000)
+    fa, fb = a.frame(len(a) - 1), b.frame(len(b) - 1)
+    oa, ob = np.argsort(fa["id"]), np.argsort(fb["id"])
+    np.testing.assert_allclose(fa["position"][oa], fb["position"][ob], rtol=0, atol=1e-12)

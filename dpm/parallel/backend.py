@@ -255,7 +255,10 @@ class MpiBackend(CpuBackend):
                        "ghosts": int(loc.bodies.ghosts),
                        "halo_bytes_per_step": float(sum(b.nbytes
                                                         for b in self._sbuf.values()))}
-        for k in ("steps", "steps_s", "halo_s", "migrate_s", "gather_s", "scatter_s"):
+        self.timing["calls"] = 1
+        self.timing["rebuilds"] = rebuilds
+        for k in ("calls", "steps", "rebuilds", "steps_s", "halo_s", "migrate_s", "gather_s",
+                  "scatter_s"):
             self.totals[k] = self.totals.get(k, 0.0) + self.timing[k]
         best = comm.allreduce((float(inner.diag[4]), self.rank), op=MPI.MAXLOC)
         d = self.diag
