@@ -180,6 +180,8 @@ def test_bad_requests_are_named():
         MpiBackend(boxes=np.zeros((2, 3)))
     with pytest.raises(dpm.ParameterError, match="rebalance"):
         MpiBackend(rebalance=0.5)
+    with pytest.raises(dpm.ParameterError, match="weight='speed'"):
+        MpiBackend(weight="speed")
 
 
 def test_one_rank_is_the_cpu_backend():

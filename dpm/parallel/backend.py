@@ -65,8 +65,18 @@ class MpiBackend(CpuBackend):
     name = "mpi"
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
-                 rebalance: float = 1.1, boxes: Any = None, comm: Any = None) -> None:
+                 rebalance: float = 1.1, boxes: Any = None, weight: str = "cost",
+                 comm: Any = None) -> None:
         super().__init__(threads=threads, force_pass=force_pass)
+        if weight not in ("cost", "time"):
+            raise ParameterError(f"MpiBackend(): weight={weight!r}; allowed: cost (elements "
+                                 "and listed contacts), time (that, scaled by each rank's "
+                                 "measured step time)")
+        #: how a re-cut weighs the bodies: "cost" (elements plus listed contacts) or
+        #: "time" (the cost scaled by each rank's measured step time per unit of cost, as
+        #: LIGGGHTS' ``balance ... weight time``: evens the ranks' times on a quiet
+        #: machine, follows noise on a shared one)
+        self.weight = weight
         if boxes is not None:
             boxes = np.asarray(boxes, float)
             if boxes.ndim != 3 or boxes.shape[1:] != (2, 3) or np.any(
@@ -95,11 +105,18 @@ class MpiBackend(CpuBackend):
         self.boxes: np.ndarray | None = None
         self._host_copy: tuple | None = None
         self._step_time = 0.0
+        self._old_boxes = self._times = None
+        self._sends: dict = {}
+        self._recvs: dict = {}
+        self._sbuf: dict = {}
+        self._rbuf: dict = {}
 
     def __getstate__(self) -> dict[str, Any]:
         state = super().__getstate__()
-        for k in ("_comm", "local", "inner", "boxes", "_host_copy", "_plan_halo"):
+        for k in ("_comm", "local", "inner", "boxes", "_host_copy", "_old_boxes", "_times"):
             state[k] = None
+        for k in ("_sends", "_recvs", "_sbuf", "_rbuf"):
+            state[k] = {}
         return state
 
     # ------------------------------------------------------------------ communicator
@@ -195,7 +212,9 @@ class MpiBackend(CpuBackend):
         same = comm.allreduce(int(self._host_unchanged()), op=MPI.MIN)
         t_scatter = time.perf_counter()
         if not same or dec.imbalance(times) > self.rebalance:
-            if same:
+            if same:  # a re-cut: each rank's bodies weighted by its measured step time
+                self._times = np.asarray(times, float)
+                self._old_boxes = self.boxes
                 self.boxes = None
             self._scatter()
         t_scatter = time.perf_counter() - t_scatter
@@ -295,8 +314,19 @@ class MpiBackend(CpuBackend):
                                      f"{self.ranks} ranks; give one box per rank")
             self.boxes = self.fixed_boxes
         elif self.boxes is None:
+            old, times = getattr(self, "_old_boxes", None), getattr(self, "_times", None)
+            if (self.weight == "time" and old is not None and times is not None
+                    and np.all(times > 0)):
+                # the cost model corrected by what each rank measured: a body's weight
+                # times its rank's step time per unit of weight (LIGGGHTS' time-weighted
+                # rcb), so that the cut evens the ranks' times, not the modelled costs
+                was = dec.owner_of(pool_pos, old)
+                per_rank = np.bincount(was, weights=weight, minlength=self.ranks)
+                scale = np.where(per_rank > 0, times / np.maximum(per_rank, 1e-300), 0.0)
+                if np.all(scale > 0):
+                    weight = weight * scale[was] / scale.mean()
+            self._old_boxes = self._times = None
             self.boxes = dec.bisect(pool_pos, weight, self.ranks, self._layer())
-        self.cost = weight
 
     def _scatter(self) -> None:
         """Cut the domain (if due) and take this rank's rows from the whole host state."""
