@@ -100,7 +100,8 @@ def run_dpm(lat, steps: int, ranks: int, threads: int, tmp: Path, oversubscribe=
     if ranks > 1:
         cmd = [_mpiexec(), "--allow-run-as-root", "--oversubscribe", "-n", str(ranks),
                "--bind-to", "none", *cmd]
-    subprocess.run(cmd, check=True, env=env, capture_output=True, text=True)
+    subprocess.run(cmd, check=True, env=env, capture_output=True, text=True,
+                   stdin=subprocess.DEVNULL)
     res = json.loads(out.read_text())
     res.update(ranks=res["ranks"], n_ranks=ranks, threads=threads,
                oversubscribed=oversubscribe)

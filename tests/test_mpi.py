@@ -69,7 +69,8 @@ def _env() -> dict[str, str]:
 def mpirun(n: int, *args: str, script: Path = DRIVER, timeout: float = 900) -> str:
     cmd = [MPIEXEC, "--allow-run-as-root", "--oversubscribe", "-n", str(n),
            sys.executable, str(script), *args]
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=_env())
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=_env(),
+                       stdin=subprocess.DEVNULL)
     assert p.returncode == 0, f"{' '.join(cmd)} failed:\n{p.stdout[-3000:]}\n{p.stderr[-3000:]}"
     return p.stdout
 
@@ -233,7 +234,8 @@ def test_dpm_run_scene_file_under_mpiexec(tmp_path):
     ser.mkdir()
     cmd = [MPIEXEC, "--allow-run-as-root", "--oversubscribe", "-n", "2", sys.executable,
            "-m", "dpm.cli", *args]
-    p = subprocess.run(cmd, cwd=par, capture_output=True, text=True, env=_env(), timeout=900)
+    p = subprocess.run(cmd, cwd=par, capture_output=True, text=True, env=_env(), timeout=900,
+                       stdin=subprocess.DEVNULL)
     assert p.returncode == 0, p.stderr[-3000:]
     assert p.stdout.count("1100 steps") == 1, p.stdout
     q = subprocess.run([sys.executable, "-m", "dpm.cli", *args], cwd=ser, capture_output=True,
