@@ -81,6 +81,7 @@ def worker(lat: tuple[int, int, int], steps: int, out: str, threads: int) -> Non
 
         rows = MPI.COMM_WORLD.allgather(rows[0])
     if dpm.parallel.rank() == 0:
+        print(f"particle_steps_per_s {n * (steps - WARMUP) / wall:.6g}", flush=True)
         Path(out).write_text(json.dumps({
             "particles": n, "timed_steps": steps - WARMUP, "wall_s": wall,
             "particle_steps_per_s": n * (steps - WARMUP) / wall, "first_steps_s": first,

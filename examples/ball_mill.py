@@ -580,7 +580,43 @@ def full_charge_revolutions(revolutions: float, out: Path, settle: int) -> dict:
         print(f"  t = {sim.time:.3f} s, {done}/{total} steps, {run_wall:.0f} s, "
               f"{res['particle_steps_per_s']:.3g} p-s/s, power {p:.1f} W", flush=True)
     sim.close()
+    full_charge_picture(res, out / "ball_mill_full_charge.png")
     return res
+
+
+def full_charge_picture(res: dict, path: Path) -> None:
+    """Cost (particle-steps/s, contacts per bead) and drive power along the full-charge
+    run, from its JSON (``res``)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    s = res["samples"]
+    t = np.asarray(s["t"])
+    fig, axs = plt.subplots(1, 2, figsize=(11, 3.8))
+    axs[0].plot(t, np.asarray(s["particle_steps_per_s"]) / 1e6, label="dpm, one core")
+    axs[0].axhline(res["thesis_particle_steps_per_s"] / 1e6, color="k", ls="--",
+                   label="thesis GPU (GTX 560 Ti)")
+    axs[0].set_xlabel("simulated time [s]")
+    axs[0].set_ylabel("million particle-steps per second")
+    ax2 = axs[0].twinx()
+    ax2.plot(t, s["contacts_per_bead"], color="tab:orange", label="contacts per bead")
+    ax2.set_ylabel("contacts per bead", color="tab:orange")
+    axs[0].legend(loc="center right", fontsize=8)
+    axs[0].set_title(f"{res['beads']:,} beads: {res['particle_steps_per_s']:.3g} "
+                     f"particle-steps/s over {res['steps_done']:,} steps", fontsize=9)
+    axs[1].plot(t, s["power_W"], label="drive power (shell + lifters + end plates)")
+    axs[1].plot(t, s["torque_arm_W"], "--", label="torque arm M g x_cm omega")
+    axs[1].set_xlabel("simulated time [s]")
+    axs[1].set_ylabel("power [W]")
+    axs[1].set_title(f"{res['revolutions']:g} revolution(s) at 70 % critical; second half: "
+                     f"{res['power_second_half_W']:.1f} W drive, "
+                     f"{res['torque_arm_second_half_W']:.1f} W torque arm", fontsize=9)
+    axs[1].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def main(argv: list[str] | None = None) -> dict:
