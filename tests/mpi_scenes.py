@@ -177,6 +177,12 @@ SCENES = {"settle": settle, "corner": corner, "slide": slide, "flow": flow,
           "gather": gather}
 
 
+def tilt_gravity(sim: dpm.Simulation) -> None:
+    """Gravity tilted 30 degrees about y, and every body's spin reversed (between runs)."""
+    sim.gravity = (G * 0.5, 0.0, -G * np.sqrt(0.75))
+    sim.bodies.angular_velocity[:] *= -1.0
+
+
 def state(sim: dpm.Simulation) -> dict[str, np.ndarray]:
     b = sim.bodies
     o = np.argsort(b.id, kind="stable")
@@ -202,6 +208,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rebalance", type=float, default=1.1)
     ap.add_argument("--output", default=None, help="also write the run to this HDF5 file")
     ap.add_argument("--calls", type=int, default=8, help="run the steps in this many calls")
+    ap.add_argument("--tilt-gravity", action="store_true",
+                    help="tilt gravity half-way (a script changing the scene between runs)")
     args = ap.parse_args(argv)
     if args.restart:
         sim = dpm.restart(args.restart)
@@ -222,6 +230,8 @@ def main(argv: list[str] | None = None) -> int:
         k = min(chunk, steps - done)
         if args.checkpoint and done < int(args.checkpoint[0]) <= done + k:
             k = int(args.checkpoint[0]) - done
+        if args.tilt_gravity and done >= steps // 2 and sim.gravity[0] == 0.0:
+            tilt_gravity(sim)
         sim.run(steps=k, progress=False)
         done += k
         if args.checkpoint and sim.step_count == int(args.checkpoint[0]):

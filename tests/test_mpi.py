@@ -120,6 +120,22 @@ def test_same_trajectories_as_one_process(scene, ranks, tmp_path):
 
 
 @needs_mpi
+def test_scene_changed_between_runs(tmp_path):
+    """A script that tilts gravity and reverses every spin between two runs: the ranks
+    take the changed host state and constants, as one process does."""
+    got = parallel("settle", 2, tmp_path, "--tilt-gravity")
+    sim, steps = mpi_scenes.settle("cpu")
+    chunk = max(1, steps // 8)
+    while sim.step_count < steps:
+        if sim.step_count >= steps // 2 and sim.gravity[0] == 0.0:
+            mpi_scenes.tilt_gravity(sim)
+        sim.run(steps=min(chunk, steps - sim.step_count), progress=False)
+    ref = mpi_scenes.state(sim)
+    assert_same(ref, got)
+    assert np.abs(ref["position"] - serial("settle")["position"]).max() > 1e-4  # it acted
+
+
+@needs_mpi
 def test_checkpoint_restarts_on_other_rank_counts(tmp_path):
     ck, run = tmp_path / "ck.h5", tmp_path / "run.h5"
     first = parallel("settle", 2, tmp_path, "--checkpoint", "400", str(ck),

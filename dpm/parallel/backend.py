@@ -219,6 +219,9 @@ class MpiBackend(CpuBackend):
             self._scatter()
         t_scatter = time.perf_counter() - t_scatter
         inner, loc = self.inner, self.local
+        sim = self.sim  # (constants a script may change between runs)
+        loc.gravity, loc.max_overlap = sim.gravity, sim.max_overlap
+        loc.sphere_orientation = sim.sphere_orientation
         module = self.module
         inner.module = module
         flags = np.zeros(3, np.int64)
