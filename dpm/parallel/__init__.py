@@ -4,8 +4,9 @@
 script's scene cut into four sub-domains, with no change to the script: a
 :class:`dpm.Simulation` made without ``device`` takes the ``"mpi"`` backend when the
 launcher started several ranks. Whether it did is read from the launcher's environment
-(Open MPI's ``OMPI_COMM_WORLD_SIZE``, MPICH's and Intel MPI's ``PMI_SIZE``, PMIx'
-``PMIX_SIZE``... ), so that a serial run never imports mpi4py.
+(Open MPI's ``OMPI_COMM_WORLD_SIZE``, MPICH's and Intel MPI's ``PMI_SIZE``, MVAPICH2's
+``MV2_COMM_WORLD_SIZE``), so that a serial run never imports mpi4py. Under ``srun``, launch
+with an MPI plugin that sets one of them (``srun --mpi=pmi2`` sets ``PMI_SIZE``).
 """
 
 from __future__ import annotations
@@ -13,8 +14,7 @@ from __future__ import annotations
 import os
 
 #: environment variables in which MPI launchers give the number of ranks
-SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "MPI_LOCALNRANKS",
-                  "SLURM_NTASKS_MPI")
+SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "MV2_COMM_WORLD_SIZE", "PMIX_SIZE")
 
 
 def launched_ranks() -> int:
