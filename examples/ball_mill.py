@@ -51,6 +51,8 @@ cache; a cold cache adds ~110 s of compilation per scene kind):
     python examples/ball_mill.py              # default: periodic slice, 3 speeds, 26 min
     python examples/ball_mill.py --quick      # CI: thin slice, one speed, 17 s
     python examples/ball_mill.py --full-charge-steps 200   # whole mill: 800 + 200 steps, 70 s
+    python examples/ball_mill.py --full-charge-revolutions 1 --threads 2  # ~1 h on 2 cores
+    python examples/ball_mill.py --full-charge-revolutions 1 --full-charge-resume  # go on
 
 The default is **not** the whole 270 mm mill: a slice of the mill 7.5 mm (2.5 bead
 diameters) long with periodic ends along the axis (``sim.set_periodic``), 7,700 beads,
@@ -530,16 +532,34 @@ def full_charge(steps: int, out: Path, settle: int = 800, revolutions: float = 0
     return res
 
 
-def full_charge_revolutions(revolutions: float, out: Path, settle: int) -> dict:
+def full_charge_revolutions(revolutions: float, out: Path, settle: int,
+                            threads: int | None = None, resume: bool = False) -> dict:
     """The whole mill (full charge, end plates) for ``revolutions`` revolutions at 70 %
     critical after ``settle`` steps: cost per step along the run, drive power and torque,
-    and the weight's torque arm M g x_cm omega (the steady-state check of the slice)."""
+    and the weight's torque arm M g x_cm omega (the steady-state check of the slice).
+
+    A checkpoint (``ball_mill_full_charge.ckpt.h5``, with the figures up to it in
+    ``.ckpt.json``) is written every 20 samples; ``resume`` goes on from it (a run of
+    ~1.5 h on one core may be done in pieces), the samples and wall time adding up."""
+    ckpt = out / "ball_mill_full_charge.ckpt.h5"
+    js = out / "ball_mill_full_charge.json"
     t0 = time.perf_counter()
-    sim = build(0.7, length=L_MILL, periodic=False, ramp=0.0)
+    if resume and ckpt.exists() and ckpt.with_suffix(".json").exists():
+        sim = dpm.restart(ckpt)
+        res = json.loads(ckpt.with_suffix(".json").read_text())
+        print(f"resumed at step {res['steps_done']}", flush=True)
+    else:
+        sim = build(0.7, length=L_MILL, periodic=False, ramp=0.0)
+        res = None
+    if threads:
+        sim.threads = threads
     n = len(sim.bodies)
     mass = float(sim.bodies.mass.sum())
     total = int(round(revolutions * 60 / rpm_of(0.7) / sim.dt))
     sample = int(round(0.01 / sim.dt))
+    if res is not None:
+        res["steps"], res["revolutions"] = total, revolutions
+        return _full_charge_loop(sim, res, out, ckpt, js, total, sample, mass)
     res = {"beads": n, "revolutions": revolutions, "settle_steps": settle,
            "steps": total, "dt_s": sim.dt, "build_s": time.perf_counter() - t0,
            "thesis_particle_steps_per_s": THESIS_PARTICLE_STEPS,
@@ -551,8 +571,15 @@ def full_charge_revolutions(revolutions: float, out: Path, settle: int) -> dict:
     t0 = time.perf_counter()
     sim.run(steps=settle, progress=False)
     res["settle_s"] = time.perf_counter() - t0
-    run_wall = 0.0
-    done = 0
+    res["run_wall_s"] = 0.0
+    res["steps_done"] = 0
+    return _full_charge_loop(sim, res, out, ckpt, js, total, sample, mass)
+
+
+def _full_charge_loop(sim, res, out, ckpt, js, total, sample, mass) -> dict:
+    n = len(sim.bodies)
+    run_wall = res["run_wall_s"]
+    done = res["steps_done"]
     smp = res["samples"]
     while done < total:
         k = min(sample, total - done)
@@ -573,10 +600,14 @@ def full_charge_revolutions(revolutions: float, out: Path, settle: int) -> dict:
         res["s_per_1000_steps"] = 1000 * run_wall / done
         res["ratio_to_thesis"] = res["particle_steps_per_s"] / THESIS_PARTICLE_STEPS
         res["steps_done"] = done
+        res["run_wall_s"] = run_wall
         half = slice(len(smp["t"]) // 2, None)  # the second half of the run
         res["power_second_half_W"] = float(np.mean(smp["power_W"][half]))
         res["torque_arm_second_half_W"] = float(np.mean(smp["torque_arm_W"][half]))
-        (out / "ball_mill_full_charge.json").write_text(json.dumps(res, indent=1))
+        if len(smp["t"]) % 20 == 0 or done >= total:
+            sim.checkpoint(ckpt)  # (with the figures up to it, which a resume takes)
+            ckpt.with_suffix(".json").write_text(json.dumps(res))
+        js.write_text(json.dumps(res, indent=1))
         print(f"  t = {sim.time:.3f} s, {done}/{total} steps, {run_wall:.0f} s, "
               f"{res['particle_steps_per_s']:.3g} p-s/s, power {p:.1f} W", flush=True)
     sim.close()
@@ -603,16 +634,17 @@ def full_charge_picture(res: dict, path: Path) -> None:
     ax2 = axs[0].twinx()
     ax2.plot(t, s["contacts_per_bead"], color="tab:orange", label="contacts per bead")
     ax2.set_ylabel("contacts per bead", color="tab:orange")
-    axs[0].legend(loc="center right", fontsize=8)
+    axs[0].legend(loc="lower right", bbox_to_anchor=(1.0, 0.15), fontsize=8)
     axs[0].set_title(f"{res['beads']:,} beads: {res['particle_steps_per_s']:.3g} "
                      f"particle-steps/s over {res['steps_done']:,} steps", fontsize=9)
     axs[1].plot(t, s["power_W"], label="drive power (shell + lifters + end plates)")
     axs[1].plot(t, s["torque_arm_W"], "--", label="torque arm M g x_cm omega")
     axs[1].set_xlabel("simulated time [s]")
     axs[1].set_ylabel("power [W]")
-    axs[1].set_title(f"{res['revolutions']:g} revolution(s) at 70 % critical; second half: "
+    turns = res["revolutions"] * res["steps_done"] / res["steps"]
+    axs[1].set_title(f"{turns:.2g} revolution(s) at 70 % critical; second half: "
                      f"{res['power_second_half_W']:.1f} W drive, "
-                     f"{res['torque_arm_second_half_W']:.1f} W torque arm", fontsize=9)
+                     f"{res['torque_arm_second_half_W']:.1f} W torque arm", fontsize=8)
     axs[1].legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -636,13 +668,19 @@ def main(argv: list[str] | None = None) -> dict:
                    help="steps before the timed ones (the lattice falls into contact)")
     p.add_argument("--full-charge-revolutions", type=float, default=0.0, metavar="R",
                    help="whole mill: run R revolutions at 70 %% (sampled every 10 ms)")
+    p.add_argument("--full-charge-resume", action="store_true",
+                   help="go on from the full-charge run's checkpoint in --output")
+    p.add_argument("--threads", type=int, default=None, help="threads of the full charge")
     args = p.parse_args(argv)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     if args.full_charge_steps or args.full_charge_revolutions:
+        if args.full_charge_revolutions:
+            return {"full_charge": full_charge_revolutions(
+                args.full_charge_revolutions, out, args.full_charge_settle, args.threads,
+                args.full_charge_resume)}
         return {"full_charge": full_charge(args.full_charge_steps, out,
-                                           args.full_charge_settle,
-                                           args.full_charge_revolutions)}
+                                           args.full_charge_settle)}
     if args.quick:
         speeds = args.speeds or [0.7]
         # 0.5 s: the 0.2 s ramp and 0.3 s at speed; averages over the last quarter turn
