@@ -259,6 +259,12 @@ def _check_format(f: Any, path: Path) -> None:
                              f"up to {FORMAT_VERSION}")
 
 
+def _start_counts(w: Any, sim: Simulation) -> None:
+    """A new file's counts: frames, particle and element rows, removal and thermo rows."""
+    w.clusters = not (sim.plan is None or sim.plan.spheres_only)
+    w.frames = w.rows = w.element_rows = w.removed = w.thermo_rows = 0
+
+
 class Writer:
     """Append frames of a :class:`dpm.Simulation` to an HDF5 file (and its XDMF sidecar).
 
@@ -286,12 +292,7 @@ class Writer:
         for s in sidecars(self.path):  # those of a replaced file describe other frames
             s.unlink(missing_ok=True)
         self._open()
-        self.clusters = not (sim.plan is None or sim.plan.spheres_only)
-        self.frames = 0
-        self.rows = 0
-        self.element_rows = 0
-        self.removed = 0
-        self.thermo_rows = 0
+        _start_counts(self, sim)
 
     def _open(self) -> None:
         self.file = h5py.File(self.path, "r+", libver="latest")
@@ -503,12 +504,7 @@ class NullWriter:
 
     def __init__(self, path: str | Path, sim: Simulation) -> None:
         self.path = Path(path)
-        self.clusters = not (sim.plan is None or sim.plan.spheres_only)
-        self.frames = 0
-        self.rows = 0
-        self.element_rows = 0
-        self.removed = 0
-        self.thermo_rows = 0
+        _start_counts(self, sim)
 
     def state(self) -> dict[str, Any]:
         return {"frames": self.frames, "removed": self.removed, "path": str(self.path)}
