@@ -358,8 +358,9 @@ def backend_here(backend: Any) -> Any:
 
     if launched_ranks() > 1 and type(backend) is CpuBackend:
         mpi = MpiBackend(threads=backend.threads, force_pass=backend.force_pass)
-        for k in ("aux", "diag", "sort_every"):
-            setattr(mpi, k, getattr(backend, k))
+        own = {k: v for k, v in mpi.__dict__.items() if k not in backend.__dict__}
+        mpi.__dict__.update(backend.__dict__)  # (its scene, integrator rows, diagnostics)
+        mpi.__dict__.update(own)
         return mpi
     if isinstance(backend, MpiBackend):
         backend._reset_local()

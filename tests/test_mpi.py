@@ -8,8 +8,9 @@ oversubscribed) against one process, under ``mpiexec`` (scenes in ``tests/mpi_sc
 - a cube cluster straddling that corner feels the serial force;
 - contact history survives migration: a spinning sphere sliding obliquely across a face
   and two spheres in a sliding contact crossing it together end as in serial;
-- a checkpoint of a 2-rank run restarts on 3 ranks and on one process and ends as the
-  uninterrupted serial run; the 2-rank output file is one file in the serial layout;
+- a checkpoint of a 2-rank run restarts on 3 ranks and on one process, and one of one
+  process on 2 ranks, and each ends as the uninterrupted serial run; the 2-rank output
+  file is one file in the serial layout;
 - load balance: bodies pulled into one corner keep the ranks' shares within 25 % of the
   mean (without re-cutting they drift to 90/10);
 - the backend contract scenes (``tests/backend_contract.py``) pass on 2 ranks;
@@ -157,6 +158,13 @@ def test_checkpoint_restarts_on_other_rank_counts(tmp_path):
     o = np.argsort(last["id"])
     np.testing.assert_allclose(last["position"][o], first["position"], rtol=0, atol=1e-15)
     assert sorted(p.name for p in tmp_path.glob("run*")) == ["run.h5", "run.xdmf"]
+    # and a checkpoint of one process goes on on 2 ranks
+    ck1 = tmp_path / "ck1.h5"
+    p = subprocess.run([sys.executable, str(DRIVER), "settle", str(tmp_path / "s1.npz"),
+                        "--device", "cpu", "--checkpoint", "400", str(ck1)],
+                       capture_output=True, text=True, env=_env(), timeout=600)
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert_same(ref, parallel("settle", 2, tmp_path, "--restart", str(ck1)))
 
 
 @needs_mpi
