@@ -206,12 +206,15 @@ class MpiBackend(CpuBackend):
 
         comm = self.comm
         n = int(comm.allreduce(int(n), op=MPI.MIN))
-        # a new cut when the host state changed (on any rank) or the ranks' step times
-        # drifted apart by more than ``rebalance``
+        # a new cut when the host state changed (on any rank), or the ranks' shares of
+        # the modelled cost (the same on every rank: the host state is) or their step
+        # times drifted apart by more than ``rebalance``
         times = comm.allgather(self._step_time)
         same = comm.allreduce(int(self._host_unchanged()), op=MPI.MIN)
         t_scatter = time.perf_counter()
-        if not same or dec.imbalance(times) > self.rebalance:
+        if not same or dec.imbalance(times) > self.rebalance or (
+                self.fixed_boxes is None and self.boxes is not None
+                and self._cost_imbalance() > self.rebalance):
             if same:  # a re-cut: each rank's bodies weighted by its measured step time
                 self._times = np.asarray(times, float)
                 self._old_boxes = self.boxes
@@ -331,16 +334,32 @@ class MpiBackend(CpuBackend):
             self._old_boxes = self._times = None
             self.boxes = dec.bisect(pool_pos, weight, self.ranks, self._layer())
 
+    def _cost(self) -> tuple[np.ndarray, Entries]:
+        """Each body's modelled cost (its elements plus its listed contacts) and the
+        host's pair entries."""
+        sim = self.sim
+        b, e = sim.bodies, sim.elements
+        pairs = Entries.of(sim.contacts)
+        nb = len(b)
+        weight = np.diff(b.element_start).astype(float)
+        weight += (np.bincount(e.owner[pairs.i], minlength=nb)
+                   + np.bincount(e.owner[pairs.j], minlength=nb))
+        return weight, pairs
+
+    def _cost_imbalance(self) -> float:
+        """Largest over mean of the ranks' modelled cost under the current cut."""
+        weight, _ = self._cost()
+        owner = dec.owner_of(self.sim.bodies.position, self.boxes)
+        return dec.imbalance(np.bincount(owner, weights=weight, minlength=self.ranks))
+
     def _scatter(self) -> None:
         """Cut the domain (if due) and take this rank's rows from the whole host state."""
         sim = self.sim
         b, e = sim.bodies, sim.elements
         c, wc = sim.contacts, sim.wall_contacts
         nb = len(b)
-        pairs = Entries.of(c)
+        weight, pairs = self._cost()
         eb_i, eb_j = e.owner[pairs.i], e.owner[pairs.j]
-        weight = np.diff(b.element_start).astype(float)
-        weight += np.bincount(eb_i, minlength=nb) + np.bincount(eb_j, minlength=nb)
         self._cut(b.position, weight)
         owner = dec.owner_of(b.position, self.boxes)
         # ghosts of rank k: every body with a listed partner owned by k, and every body
