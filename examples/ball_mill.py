@@ -485,14 +485,10 @@ def morrell_angles(phi: float, fill: float) -> tuple[float, float]:
     return math.degrees(tt), math.degrees(ts)
 
 
-def full_charge(steps: int, out: Path, settle: int = 800, revolutions: float = 0.0) -> dict:
+def full_charge(steps: int, out: Path, settle: int = 800) -> dict:
     """Build the whole mill with the full charge, let it fall into contact for ``settle``
     steps (20 ms by default: the lattice's 0.1 r gaps close from the bottom up), then time
-    ``steps`` steps; with ``revolutions`` > 0 run that many revolutions instead, sampling
-    the drive power, torque and contacts every 10 ms (``ball_mill_full_charge.json`` is
-    rewritten at each sample, so a stopped run keeps what it measured)."""
-    if revolutions > 0:
-        return full_charge_revolutions(revolutions, out, settle)
+    ``steps`` steps (:func:`full_charge_revolutions` runs whole revolutions)."""
     t0 = time.perf_counter()
     sim = build(0.7, length=L_MILL, periodic=False, ramp=0.0)
     n = len(sim.bodies)

@@ -253,7 +253,7 @@ class MpiBackend(CpuBackend):
             if out[1]:
                 t0 = time.perf_counter()
                 self._migrate()
-                self._rebuild_local()
+                inner.rebuild()  # (history of the carried entries merged by pair)
                 rebuilds += 1
                 t_mig += time.perf_counter() - t0
                 rec = inner.records()
@@ -291,11 +291,6 @@ class MpiBackend(CpuBackend):
         d[5] = comm.bcast(worst_e, root=best[1])
         d[1] = ran
         return StepResult(ran, status, rebuilds, float(best[0]), int(d[5]))
-
-    def _rebuild_local(self) -> None:
-        """The rank's lists from its rows, the carried entries' history merged by pair;
-        ghosts' references are their owners' (same step, same positions)."""
-        self.inner.rebuild()
 
     # ------------------------------------------------------------------ scatter
     def _layer(self) -> float:
@@ -424,8 +419,6 @@ class MpiBackend(CpuBackend):
                     sends[k] = rows.astype(np.int64)
         self._sends = sends
         self._recvs = ranges
-        self._owner_local = owner[mine]  # (all me)
-        self._ghost_on_local = ghost_on[:, mine]
         width = STATE_WIDTH + aux.shape[1]
         self._sbuf = {k: np.empty((len(r), width)) for k, r in sends.items()}
         self._rbuf = {k: np.empty((cnt, width)) for k, (_, cnt) in ranges.items()}

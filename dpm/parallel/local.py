@@ -180,7 +180,7 @@ class LocalScene:
         self.contacts.set_history_width(sim.plan.history_width)
         self.wall_contacts.set_history_width(sim.plan.history_width)
         self.rebuild_count = 0
-        #: rows of the pool each local body came from, at the last assembly
+        #: owned bodies (the first rows; the ghosts follow)
         self.n_owned = 0
 
 
