@@ -30,8 +30,11 @@ from .shapes import BUILTIN_SHAPES
 
 @hookimpl
 def dpm_register_shapes(register: Register) -> None:
+    from .shapes.library import LibraryShape
+
     for name, cls in BUILTIN_SHAPES.items():
         register(name, cls)
+    register("library", LibraryShape)  # path = a grain's name or a .json file
 
 
 @hookimpl
@@ -68,6 +71,33 @@ def dpm_register_integrators(register: Register) -> None:
     register("backward_euler", BackwardEuler)
     register("newmark_beta", NewmarkBeta)
     register("numerov", Numerov)
+
+
+@hookimpl
+def dpm_register_motions(register: Register) -> None:
+    from . import motion
+
+    register("translation", motion.Translation)
+    register("rotation", motion.Rotation)
+    register("oscillation", motion.Oscillation)
+    register("triangular_oscillation", motion.TriangularOscillation)
+    register("tumbling", motion.Tumbling)
+
+
+@hookimpl
+def dpm_register_regions(register: Register) -> None:
+    from .regions import BoxRegion, CylinderRegion
+
+    register("box", BoxRegion)
+    register("cylinder", CylinderRegion)
+
+
+@hookimpl
+def dpm_register_rolling_models(register: Register) -> None:
+    from .impact.parts import EPSD, ConstantTorque
+
+    register("constant_torque", ConstantTorque)
+    register("epsd", EPSD)
 
 
 @hookimpl

@@ -40,6 +40,7 @@ import numpy as np
 
 from ._lazy import lazy_module
 from .errors import ParameterError
+from .plugins import call_hook
 
 h5py = lazy_module("h5py")
 
@@ -188,7 +189,7 @@ def write(sim: Simulation, path: str | os.PathLike) -> Path:
     if sim._writer is not None:
         sim._writer.flush()  # the frames the checkpoint counts are on disk
     state: dict[str, Any] = {}
-    sim._registry.manager.hook.dpm_on_checkpoint(sim=sim, state=state)
+    call_hook(sim._registry, "dpm_on_checkpoint", sim=sim, state=state)
     sim._plugin_state = state
     buf = io.BytesIO()
     pickler = _Pickler(buf)

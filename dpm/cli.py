@@ -63,6 +63,23 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def summary_of(obj: object) -> str:
+    """The first sentence of ``obj``'s docstring as plain text: reST roles and literals
+    unwrapped (``:class:`~a.b.C``` -> C, ````x```` -> x), lines joined, never cut."""
+    import re
+
+    doc = inspect.getdoc(obj) or ""
+    para = " ".join(doc.split("\n\n")[0].split())
+    para = re.sub(r":[a-z]+:`~?([^`<]*?)(?:\s*<[^>]*>)?`",
+                  lambda m: m.group(1).rsplit(".", 1)[-1]
+                  if m.group(0).count("~") else m.group(1), para)
+    para = re.sub(r"``([^`]*)``", r"\1", para)
+    para = re.sub(r"(?<![\w*])\*([^*]+)\*(?![\w*])", r"\1", para)
+    # a sentence ends at a full stop before a capital or the end ("eq. 2.53" goes on)
+    m = re.search(r"(?<!\be\.g)(?<!\bi\.e)\.(?=\s+[A-Z]|$)", para)
+    return para[:m.start() + 1] if m else para
+
+
 def _cmd_plugins(args: argparse.Namespace) -> int:
     from .plugins import KINDS, registry
 
@@ -71,13 +88,18 @@ def _cmd_plugins(args: argparse.Namespace) -> int:
     for kind in KINDS:
         for name in reg.names(kind):
             e = reg.entries[kind][name]
-            doc = (inspect.getdoc(e.cls) or "").splitlines()
-            rows.append((kind, name, f"{e.cls.__module__}.{e.cls.__qualname__}", e.source,
-                         doc[0] if doc else ""))
-    w = [max(len(r[i]) for r in rows) for i in range(4)]
-    print(f"{'kind':<{w[0]}}  {'name':<{w[1]}}  {'class':<{w[2]}}  {'source':<{w[3]}}  summary")
+            rows.append((kind, name, e.source, e.version or "-",
+                         f"{e.cls.__module__}.{e.cls.__qualname__}", summary_of(e.cls)))
+    cols = ["kind", "name", "source", "version"] + (["class"] if args.verbose else [])
+    w = [max(len(c), *(len(r[i]) for r in rows)) for i, c in enumerate(cols)]
+    print("  ".join(f"{c:<{w[i]}}" for i, c in enumerate(cols)) + "  summary")
     for r in rows:
-        print(f"{r[0]:<{w[0]}}  {r[1]:<{w[1]}}  {r[2]:<{w[2]}}  {r[3]:<{w[3]}}  {r[4]}")
+        print("  ".join(f"{r[i]:<{w[i]}}" for i in range(len(cols))) + "  " + r[5])
+    for (kind, name), entries in sorted(reg.conflicts.items()):
+        print(f"CONFLICT {kind} {name!r}: registered by "
+              + " and by ".join(e.source for e in entries))
+    for source in reg.blocked:
+        print(f"BLOCKED plugin {source} (DPM_BLOCK_PLUGINS)")
     for source, why in reg.broken:
         print(f"BROKEN plugin {source}: {why}")
     return 0
@@ -113,7 +135,10 @@ def _cmd_clear_cache(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from .plugins import version
+
     p = argparse.ArgumentParser(prog="dpm", description="Discrete Particle Method (DEM)")
+    p.add_argument("--version", action="version", version=f"dpm {version()}")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("run", help="run a TOML scene file")
     r.add_argument("scene")
@@ -131,8 +156,10 @@ def main(argv: list[str] | None = None) -> int:
     r.add_argument("--checkpoint", default=None, metavar="PATH",
                    help="base name of the checkpoints (default: SCENE.ckpt.h5)")
     r.set_defaults(func=_cmd_run)
-    sub.add_parser("plugins", help="list registered shapes, boundaries, impact models, "
-                   "integrators").set_defaults(func=_cmd_plugins)
+    pl = sub.add_parser("plugins", help="list every registered shape, boundary, impact model, "
+                        "integrator, backend, motion, region and rolling model")
+    pl.add_argument("-v", "--verbose", action="store_true", help="with each one's class")
+    pl.set_defaults(func=_cmd_plugins)
     x = sub.add_parser("xdmf", help="(re)write the XDMF sidecar of an HDF5 run")
     x.add_argument("run")
     x.set_defaults(func=_cmd_xdmf)

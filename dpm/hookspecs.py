@@ -56,6 +56,24 @@ def dpm_register_backends(register: Register) -> None:
 
 
 @hookspec
+def dpm_register_motions(register: Register) -> None:
+    """Register prescribed boundary motions (subclasses of :class:`dpm.motion.Motion`;
+    a scene file names them as ``motion = { type = "name", ... }``)."""
+
+
+@hookspec
+def dpm_register_regions(register: Register) -> None:
+    """Register regions for inlets and outlets (subclasses of :class:`dpm.regions.Region`;
+    a scene file names them as ``region = { name = {...} }``)."""
+
+
+@hookspec
+def dpm_register_rolling_models(register: Register) -> None:
+    """Register rolling-resistance parts (subclasses of :class:`dpm.impact.parts.RollingPart`;
+    a composed impact model selects one by ``rolling_model = "name"``)."""
+
+
+@hookspec
 def dpm_before_step(sim: Simulation) -> None:
     """Called before every step (makes the run return to Python each step)."""
 

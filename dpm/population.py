@@ -14,6 +14,7 @@ import numpy as np
 
 from .flow import Inlet, random_quaternions
 from .motion import frames
+from .plugins import call_hook
 from .shapes.base import Shape
 from .state import BoundaryTable
 
@@ -180,9 +181,38 @@ def share_sphere_arrays(sim: Any) -> None:
         e.material = b.material
 
 
+def wait_for_inlets(sim: Any, nsteps: int) -> int:
+    """An empty scene whose inlets start later: time advances by whole flow intervals,
+    with nothing to compute, until a flow event brings the first bodies or ``nsteps``
+    steps have passed; returns the steps skipped. The inlets are checked first (a region
+    that could never take a particle is refused now, not after the wait). Output and
+    checkpoints begin with the first bodies."""
+    from .errors import SceneError
+    from .scene_check import inlet_problems
+
+    problems = inlet_problems(sim)
+    if problems:
+        raise SceneError("scene check before the first step:\n  " + "\n  ".join(problems))
+    sim._schedule_flows()
+    skipped = 0
+    while len(sim.bodies) == 0 and skipped < nsteps:
+        n = min(nsteps - skipped, max(1, sim._next_flow - sim.step_count))
+        sim.step_count += n
+        skipped += n
+        if sim.step_count >= sim._next_flow:
+            sim._next_flow += sim._flow_every
+            flow_event(sim)
+    return skipped
+
+
 def population_changed(sim: Any) -> None:
     """After bodies were inserted or removed during a run: the scene's form (fused or
-    two-pass), shared sphere arrays, then the backend resizes, rebuilds and primes."""
+    two-pass), shared sphere arrays, then the backend resizes, rebuilds and primes; the
+    thread count follows the new size (a scene an inlet fills from a few bodies gets
+    ``threads`` / ``DPM_THREADS`` once it is large enough)."""
+    import numba
+
+    numba.set_num_threads(sim.backend.thread_count(len(sim.elements)))
     sim.plan.spheres_only = spheres_only(sim)
     if sim.plan.spheres_only:
         share_sphere_arrays(sim)
@@ -195,7 +225,6 @@ def population_changed(sim: Any) -> None:
 
 def flow_event(sim: Any) -> None:
     """Outlets, then inlets, at the current time."""
-    hooks = sim._registry.manager.hook
     changed = False
     prepared = sim._prepared
     for k, outlet in enumerate(sim.outlets):
@@ -207,12 +236,14 @@ def flow_event(sim: Any) -> None:
             outlet.record(rec)
             if sim._writer is not None:
                 sim._writer.write_removed(rec, k)
-            hooks.dpm_on_particles_removed(sim=sim, outlet=outlet, records=rec)
+            call_hook(sim._registry, "dpm_on_particles_removed", sim=sim, outlet=outlet,
+                      records=rec)
     for inlet in sim.inlets:
         ids = insert(sim, inlet)
         if len(ids):
             changed = True
-            hooks.dpm_on_particles_inserted(sim=sim, inlet=inlet, ids=ids)
+            call_hook(sim._registry, "dpm_on_particles_inserted", sim=sim, inlet=inlet,
+                      ids=ids)
     if changed and prepared:
         population_changed(sim)
 
@@ -286,7 +317,6 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
         owed -= m if by_mass else 1.0
         inlet.inserted += 1
         inlet.inserted_mass += m
-    inlet.settle(owed)
     out = np.concatenate(new_ids) if new_ids else np.zeros(0, np.int64)
     inlet.ids.append(out)
     return out

@@ -26,8 +26,6 @@ TABLES = ("materials",)
 #: keys a [[particles]] table takes besides its shape's parameters
 PARTICLE_KEYS = ("shape", "material", "csv", "lattice", "positions", "velocities",
                  "angular_velocities", "orientations")
-MOTIONS = {"translation": "Translation", "rotation": "Rotation", "oscillation": "Oscillation",
-           "triangular_oscillation": "TriangularOscillation", "tumbling": "Tumbling"}
 
 
 def read_scene(path: str | Path) -> dict[str, Any]:
@@ -114,27 +112,31 @@ def _params(kind: str, name: Any, where: str) -> tuple[list[str], list[str]]:
 
 
 def _region(where: str, spec: Any) -> list[str]:
-    from .regions import BoxRegion, CylinderRegion
+    from .plugins import registry
 
-    kinds = {"box": BoxRegion, "cylinder": CylinderRegion}
-    if not isinstance(spec, dict) or len(spec) != 1 or next(iter(spec)) not in kinds:
-        return [f"{where}: region = {spec!r} must be {{ box = {{...}} }} or "
-                "{ cylinder = {...} }"]
+    reg = registry()
+    names = reg.names("region")
+    if not isinstance(spec, dict) or len(spec) != 1 or next(iter(spec)) not in names:
+        return [f"{where}: region = {spec!r} must be one of "
+                + ", ".join(f"{{ {n} = {{...}} }}" for n in names)]
     kind, kw = next(iter(spec.items()))
     if not isinstance(kw, dict):
         return [f"{where}: region.{kind} = {kw!r} must be a table"]
-    return _unknown(f"{where}: region.{kind}", kw, kinds[kind].parameters)
+    return _unknown(f"{where}: region.{kind}", kw,
+                    getattr(reg.lookup("region", kind, where), "parameters", {}))
 
 
 def _motion(where: str, spec: Any) -> list[str]:
-    from . import motion as mo
+    from .plugins import registry
 
     if isinstance(spec, list):
         return [m for k, s in enumerate(spec) for m in _motion(f"{where}[{k}]", s)]
-    if not isinstance(spec, dict) or spec.get("type") not in MOTIONS:
-        return [f"{where}: motion = {spec!r} needs type = one of {', '.join(MOTIONS)}"]
-    cls = getattr(mo, MOTIONS[spec["type"]])
-    return _unknown(f"{where}: motion", spec, ["type", *cls.parameters])
+    reg = registry()
+    names = reg.names("motion")
+    if not isinstance(spec, dict) or spec.get("type") not in names:
+        return [f"{where}: motion = {spec!r} needs type = one of {', '.join(names)}"]
+    cls = reg.lookup("motion", spec["type"], where)
+    return _unknown(f"{where}: motion", spec, ["type", *getattr(cls, "parameters", {})])
 
 
 def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:

@@ -37,7 +37,7 @@ from .material import Material
 from .measures import to_body as _to_body  # noqa: F401  (used by tests and scripts)
 from .motion import frames
 from .parameters import Parameter, validate
-from .plugins import registry
+from .plugins import call_hook, registry
 from .regions import Region
 from .shapes.base import Shape
 from .state import Bodies, BoundaryTable, Contacts, Elements, WallContacts
@@ -713,16 +713,21 @@ class Simulation:
         else:
             validate("sim.run()", {"until": Parameter(low=self.time, unit="s")},
                      {"until": until})
-        if not self._prepared:
-            if self.inlets and self.step_count == 0 and not self._forces_valid:
-                population.flow_event(self)  # an inlet may fill an empty scene
-            self._prepare()
-        elif not self._dt_checked:  # dt (or dt_check) changed since the last run
-            self._check_time_step()
         if steps is not None:
             nsteps = int(steps)
         else:
             nsteps = max(0, math.ceil((until - self.time) / self.dt - 1e-9))
+        if not self._prepared:
+            if self.inlets and not self._forces_valid and (
+                    self.step_count == 0 or len(self.bodies) == 0):
+                population.flow_event(self)  # an inlet may fill an empty scene
+                if len(self.bodies) == 0:
+                    nsteps -= population.wait_for_inlets(self, nsteps)
+                    if len(self.bodies) == 0:
+                        return  # (the inlets start later than this run ends)
+            self._prepare()
+        elif not self._dt_checked:  # dt (or dt_check) changed since the last run
+            self._check_time_step()
         threads_before = numba.get_num_threads()
         numba.set_num_threads(self.backend.thread_count(len(self.elements)))
         try:
@@ -781,13 +786,13 @@ class Simulation:
                 for due in self._due_steps():
                     n = min(n, due - self.step_count)
                 if per_step_hooks:
-                    hooks.dpm_before_step(sim=self)
+                    call_hook(self._registry, "dpm_before_step", sim=self)
                 t0 = _time.perf_counter()
                 ran = self._advance(n)
                 elapsed = _time.perf_counter() - t0
                 done += ran
                 if per_step_hooks:
-                    hooks.dpm_after_step(sim=self)
+                    call_hook(self._registry, "dpm_after_step", sim=self)
                 if self._flow_every and self.step_count >= self._next_flow:
                     self._next_flow += self._flow_every
                     population.flow_event(self)
@@ -903,8 +908,8 @@ class Simulation:
     def _write_frame(self) -> None:
         self._writer.write(self)
         self._last_frame_step = self.step_count
-        self._registry.manager.hook.dpm_on_output(sim=self, frame=self._writer.frames - 1,
-                                                  path=self._writer.path)
+        call_hook(self._registry, "dpm_on_output", sim=self, frame=self._writer.frames - 1,
+                  path=self._writer.path)
 
     # ----------------------------------------------------------------- checkpoints
     def checkpoint(self, path: str | os.PathLike) -> Path:
@@ -975,8 +980,8 @@ class Simulation:
         resume_output(self, ws)
         if self._checkpoints is not None and self._checkpoints.next_step <= self.step_count:
             self._checkpoints.next_step = self.step_count + self._checkpoints.interval(self.dt)
-        self._registry.manager.hook.dpm_on_restart(
-            sim=self, state=self.__dict__.pop("_plugin_state", {}) or {})
+        call_hook(self._registry, "dpm_on_restart", sim=self,
+                  state=self.__dict__.pop("_plugin_state", {}) or {})
 
     # ----------------------------------------------------------------- measures
     def kinetic_energy(self) -> float:

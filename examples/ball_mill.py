@@ -557,6 +557,7 @@ def full_charge_revolutions(revolutions: float, out: Path, settle: int,
         res["steps"], res["revolutions"] = total, revolutions
         return _full_charge_loop(sim, res, out, ckpt, js, total, sample, mass)
     res = {"beads": n, "revolutions": revolutions, "settle_steps": settle,
+           "threads": int(threads or 1),
            "steps": total, "dt_s": sim.dt, "build_s": time.perf_counter() - t0,
            "thesis_particle_steps_per_s": THESIS_PARTICLE_STEPS,
            "samples": {k: [] for k in ("t", "steps_done", "wall_s", "particle_steps_per_s",
@@ -622,7 +623,8 @@ def full_charge_picture(res: dict, path: Path) -> None:
     s = res["samples"]
     t = np.asarray(s["t"])
     fig, axs = plt.subplots(1, 2, figsize=(11, 3.8))
-    axs[0].plot(t, np.asarray(s["particle_steps_per_s"]) / 1e6, label="dpm, one core")
+    axs[0].plot(t, np.asarray(s["particle_steps_per_s"]) / 1e6,
+                label=f"dpm, {res.get('threads', 1)} thread(s)")
     axs[0].axhline(res["thesis_particle_steps_per_s"] / 1e6, color="k", ls="--",
                    label="thesis GPU (GTX 560 Ti)")
     axs[0].set_xlabel("simulated time [s]")

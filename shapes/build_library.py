@@ -26,6 +26,7 @@ from dpm.shapes.metrics import report_table, shape_report
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
+GRAIN_DIR = lib.LIBRARY_DIR  # (dpm/shapes/grains: installed with the package)
 RESOLUTION = 0.3
 TABLE_RESOLUTIONS = (0.1, 0.3, 0.6)
 #: built-in shapes stored in the library too (the benchmark's shapes)
@@ -168,17 +169,17 @@ resolution 0.3:
 def build_library() -> list[Path]:
     out = []
     for name, (make, text) in GRAINS.items():
-        src = HERE / f"{name}.stl"
+        src = GRAIN_DIR / f"{name}.stl"
         make().export(src)
         shape = MeshShape(path=str(src), resolution=RESOLUTION)
         rep = shape_report(shape)
-        out.append(lib.save(shape, HERE / f"{name}.json", name=name, description=text,
+        out.append(lib.save(shape, GRAIN_DIR / f"{name}.json", name=name, description=text,
                             report=rep))
         print(f"{name}: {rep['count']} spheres", file=sys.stderr)
     for name in BUILTIN_ENTRIES:
         shape = BUILTIN_SHAPES[name](resolution=RESOLUTION)
         rep = shape_report(shape)
-        out.append(lib.save(shape, HERE / f"{name}.json", name=name,
+        out.append(lib.save(shape, GRAIN_DIR / f"{name}.json", name=name,
                             description=f"built-in {shape.describe()}", report=rep))
         print(f"{name}: {rep['count']} spheres", file=sys.stderr)
     return out
@@ -186,7 +187,7 @@ def build_library() -> list[Path]:
 
 def write_table() -> str:
     specs = [n for n in BUILTIN_SHAPES if n not in ("sphere", "mesh")]
-    specs += [str((HERE / f"{g}.stl").relative_to(ROOT)) for g in GRAINS]
+    specs += [str((GRAIN_DIR / f"{g}.stl").relative_to(ROOT)) for g in GRAINS]
     table = report_table(specs, TABLE_RESOLUTIONS)
     readme = HERE / "README.md"
     text = readme.read_text()
@@ -218,8 +219,8 @@ def write_docs() -> None:
         if name == "sphere":
             continue
         if name == "mesh":
-            shape = MeshShape(path=str(HERE / "rock.stl"), resolution=RESOLUTION)
-            title = f"mesh: shapes/rock.stl, resolution {RESOLUTION}"
+            shape = MeshShape(path=str(GRAIN_DIR / "rock.stl"), resolution=RESOLUTION)
+            title = f"mesh: dpm/shapes/grains/rock.stl, resolution {RESOLUTION}"
         else:
             shape = cls()
             title = f"{shape.describe()}"

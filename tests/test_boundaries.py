@@ -963,3 +963,33 @@ def test_candidate_list_matches_brute_force(moved):
         assert np.abs(sim.walls.frame[0, 3:12] - pose[0].ravel()).max() > 0.1
         sim.backend.rebuild()
         assert pair_set(sim) == brute_pairs(sim, sim.skin)
+
+
+def test_mesh_transform_scale_rotate_translate_matches_trimesh(tmp_path):
+    """A CAD file in mm turned about two axes and shifted: the boundary's vertices equal
+    trimesh's own transforms of the file (scale, then the rotations in order, then the
+    shift); a rotation keeps a closed mesh's side and volume; bad rotations are named."""
+    from trimesh import transformations as tf
+
+    box = trimesh.creation.box((40.0, 20.0, 10.0))  # mm
+    box.apply_translation((5.0, 0.0, 0.0))
+    box.export(tmp_path / "part.stl")
+    steel = dpm.Material("steel", density=7800, young=2e8, poisson=0.3)
+    rot = [(0, 0, 1, 90.0), (1, 0, 0, 30.0)]
+    mesh = dpm.boundaries.Mesh(steel, file=tmp_path / "part.stl", scale=1e-3, rotate=rot,
+                               translate=(0.1, 0.2, 0.3))
+    ref = trimesh.load(tmp_path / "part.stl")
+    ref.apply_scale(1e-3)
+    ref.apply_transform(tf.rotation_matrix(math.radians(90.0), (0, 0, 1)))
+    ref.apply_transform(tf.rotation_matrix(math.radians(30.0), (1, 0, 0)))
+    ref.apply_translation((0.1, 0.2, 0.3))
+    np.testing.assert_allclose(mesh.vertices, ref.vertices, atol=1e-15)
+    assert mesh.volume() == pytest.approx(40e-3 * 20e-3 * 10e-3, rel=1e-12)
+    assert mesh.side == "outside"
+    as_matrix = dpm.boundaries.Mesh(steel, file=tmp_path / "part.stl", scale=1e-3,
+                                    rotate=mesh.rotation, translate=(0.1, 0.2, 0.3))
+    np.testing.assert_allclose(as_matrix.vertices, ref.vertices, atol=1e-15)
+    for bad, msg in [((0, 0, 0, 10.0), "zero axis"), (np.diag([1.0, 1.0, -1.0]),
+                     "not a rotation matrix"), ((1, 2, 3), "allowed: \\(ax, ay, az, degrees\\)")]:
+        with pytest.raises(dpm.ParameterError, match=f"rotate=.*{msg}"):
+            dpm.boundaries.Mesh(steel, file=tmp_path / "part.stl", rotate=bad)

@@ -178,3 +178,37 @@ def test_flow_and_periodic_errors_name_the_parameter():
     sim.add_particles("sphere", material=m, radius=1e-3, positions=[[0.002, 0.0, 0.0]])
     with pytest.raises(dpm.ParameterError, match="period along x is 0.004 m; it must be"):
         sim.run(steps=1, progress=False)
+
+
+def test_inlet_starting_later_fills_an_empty_scene(tmp_path):
+    """An empty scene whose inlet starts at 0.05 s waits (time advances, nothing to
+    compute) and runs from the first insertion; the first body arrives at the start of the
+    first interval that owes a whole one and falls freely from there:
+    z(t) = z0 - g (t - t_in)^2 / 2."""
+    sim, m = base(dt=1e-5)
+    inlet = sim.add_inlet(dpm.BoxRegion((0.0, 0.0, 0.1), (0.01, 0.01, 0.11)), m, rate=1000.0,
+                          radius=1e-3, every=1e-3, start=0.05, stop=0.051, seed=3)
+    sim.output(tmp_path / "late.h5", every=0.01)
+    sim.run(until=0.02, progress=False)  # ends before the start: no bodies, no file yet
+    assert len(sim.bodies) == 0 and sim.time == pytest.approx(0.02)
+    assert not (tmp_path / "late.h5").exists()
+    sim.run(until=0.1, progress=False)
+    assert inlet.inserted == 1 and len(sim.bodies) == 1
+    t_in = 0.05  # the first interval that owes a whole body: [0.05, 0.051]
+    z0 = sim.bodies.position[0, 2] + 0.5 * G * (0.1 - t_in) ** 2
+    assert 0.1 + 1e-3 <= z0 <= 0.11 - 1e-3  # it started inside the region at rest
+    run = dpm.load(tmp_path / "late.h5")
+    assert run.times[0] == pytest.approx(t_in, abs=1e-9)
+    assert run.times[-1] == pytest.approx(0.1, abs=1e-9)
+
+
+def test_inlet_count_is_exact_over_many_intervals():
+    """500 bodies at 500/s over [0.2, 1.2] s in intervals of 1e-3 s: 500, not 499 (the
+    interval sums of 1.2 - 0.2 are a hair under 1)."""
+    sim, m = base(dt=1e-3, gravity=(0.0, 0.0, 0.0))
+    inlet = sim.add_inlet(dpm.BoxRegion((0.0, 0.0, 0.0), (0.5, 0.5, 0.5)), m, rate=500.0,
+                          radius=1e-3, every=1e-3, start=0.2, stop=1.2, seed=2)
+    for t in np.arange(0.0, 1.5, 1e-3):
+        inlet.owed(t)  # polled as often as the runs do
+    assert inlet.owed(1.5) == 500.0
+    assert inlet.owed(0.7) == pytest.approx(250.0)

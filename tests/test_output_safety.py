@@ -51,17 +51,20 @@ def _fake_sim(k, nb=2):
     bodies = _Rows(id=np.arange(n) + 10 * k, position=rng.random((n, 3)),
                    velocity=rng.random((n, 3)), orientation=rng.random((n, 4)),
                    angular_velocity=rng.random((n, 3)), radius=rng.random(n),
-                   mass=rng.random(n), material=np.zeros(n, "i4"))
+                   mass=rng.random(n), material=np.zeros(n, "i4"),
+                   shape=np.zeros(n, "i4"))
     owner = np.repeat(np.arange(n), 2)
     elements = _Rows(position=rng.random((2 * n, 3)), radius=rng.random(2 * n), owner=owner)
-    boundaries = [SimpleNamespace(name="box", force=rng.random(3), torque=rng.random(3))
+    tri = (np.eye(3), np.array([[0, 1, 2]]))  # a surface of one triangle, at rest
+    boundaries = [SimpleNamespace(name="box", force=rng.random(3), torque=rng.random(3),
+                                  motion=None, surface=lambda extent: tri)
                   for _ in range(nb)]
     return SimpleNamespace(dt=1e-5, gravity=(0.0, 0.0, -9.81),
                            integrator=SimpleNamespace(name="velocity_verlet"),
                            materials=[SimpleNamespace(name="glass")], boundaries=boundaries,
                            bodies=bodies, elements=elements,
                            plan=SimpleNamespace(spheres_only=False),
-                           step_count=100 * k, time=1e-3 * k)
+                           step_count=100 * k, time=1e-3 * k, shape_names=["sphere"])
 
 
 def _removals(k):
@@ -126,7 +129,8 @@ def test_existing_file_is_kept_unless_overwrite(tmp_path):
     np.testing.assert_array_equal(run.steps, [0, 50, 100])
     assert not stale.exists()
     assert len(ET.parse(path.with_suffix(".xdmf")).findall(".//Grid[@GridType='Uniform']")) == 3
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.h5", "run.xdmf"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.boundaries.xdmf", "run.h5",
+                                                          "run.xdmf"]
 
 
 def test_file_appearing_before_the_run_is_kept(tmp_path):
@@ -412,8 +416,8 @@ def test_sidecar_write_is_atomic(tmp_path, monkeypatch):
         hdf5.write_xdmf(path)
     monkeypatch.undo()
     assert path.with_suffix(".xdmf").read_text() == before
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.elements.xdmf", "run.h5",
-                                                          "run.xdmf"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "run.boundaries.xdmf", "run.elements.xdmf", "run.h5", "run.xdmf"]
 
 
 # ---------------------------------------------------------------- 5. resume

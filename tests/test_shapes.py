@@ -360,3 +360,36 @@ def test_report_table_and_specs():
     assert "cube(a=0.001)" in rows[0] and "rock" in rows[2]
     with pytest.raises(ParameterError, match="neither a registered shape"):
         report_table(["no_such_shape"], [0.1])
+
+
+def test_library_grains_by_name_in_a_script_a_scene_file_and_an_inlet(tmp_path):
+    """A grain is a shape name ("rock"): the same bodies as library.load("rock"); in a
+    scene file (shape = "rock", or shape = "library" with path = "cylinder": the built-in
+    name wins); an inlet's pickled grain class loads again (checkpoints)."""
+    import pickle
+
+    from dpm.io.scene import load_scene
+
+    rock = lib.load("rock")
+    m = dpm.Material("stone", density=2600, young=5e7, poisson=0.3)
+    sim = dpm.Simulation(dt=1e-6)
+    sim.add_particles("rock", material=m, positions=[[0, 0, 0]])
+    assert sim.bodies.mass[0] == pytest.approx(2600 * rock.mass_properties().volume)
+    assert len(sim.elements) == len(rock.cluster()) and sim.shape_names == ["rock"]
+    assert sim._registry.lookup("shape", "cylinder") is dpm.shapes.Cylinder
+    (tmp_path / "g.toml").write_text(
+        '[simulation]\ndt = 1e-6\n[materials.stone]\ndensity = 2600\nyoung = 5e7\n'
+        'poisson = 0.3\n[[contacts]]\nmaterials = ["stone", "stone"]\n'
+        '[[particles]]\nshape = "rock"\nmaterial = "stone"\npositions = [[0, 0, 0]]\n'
+        '[[particles]]\nshape = "library"\npath = "cylinder"\nmaterial = "stone"\n'
+        'positions = [[0.05, 0, 0]]\n')
+    scene, _ = load_scene(tmp_path / "g.toml", output=False)
+    assert scene.shape_names == ["rock", "library:cylinder"]
+    assert len(scene.elements) == len(rock.cluster()) + len(lib.load("cylinder").cluster())
+    (tmp_path / "bad.toml").write_text(
+        (tmp_path / "g.toml").read_text().replace('shape = "rock"', 'shape = "rokc"'))
+    with pytest.raises(ParameterError, match=r"unknown shape 'rokc'.*library grains: .*rock"):
+        load_scene(tmp_path / "bad.toml", output=False)
+    inlet = sim.add_inlet(dpm.BoxRegion((0, 0, 0.1), (0.1, 0.1, 0.2)), m, rate=10,
+                          shape="rock")
+    assert pickle.loads(pickle.dumps(inlet)).resolved[0][0] is lib.shape_class("rock")

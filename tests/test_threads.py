@@ -88,3 +88,32 @@ def test_clustered_bodies_one_and_two_threads_identical():
         runs.append(_state(sim))
     for a, b in zip(*runs, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 threads")
+def test_thread_count_follows_a_scene_an_inlet_grows(monkeypatch):
+    """DPM_THREADS=2: a scene of 4 spheres runs on one thread (below the small-scene
+    size), and on two once an inlet has brought 5,000 more, in the same run."""
+    monkeypatch.setenv("DPM_THREADS", "2")
+    sim = dpm.Simulation(dt=1e-5, gravity=(0, 0, 0), dt_check="off")
+    steel = dpm.Material("steel", density=7800, young=2e8, poisson=0.3)
+    sim.contact(steel, steel, model="hertz_mindlin", restitution=0.6, friction=0.4)
+    sim.add_particles("sphere", material=steel, radius=5e-4,
+                      positions=dpm.lattice((0, 0, 0), (4e-3, 4e-3, 2e-3), 2e-3))
+    sim.add_inlet(dpm.BoxRegion((0.0, 0.0, 0.01), (0.1, 0.1, 0.11)), steel, rate=5e6,
+                  radius=5e-4, every=1e-3, start=1e-3, stop=2e-3, seed=4)
+    seen = []
+
+    class Probe:
+        @dpm.hookimpl
+        def dpm_after_step(self, sim):
+            seen.append((len(sim.elements), numba.get_num_threads()))
+
+    probe = Probe()
+    sim._registry.manager.register(probe, name="thread-probe")
+    try:
+        sim.run(steps=200, progress=False)
+    finally:
+        sim._registry.manager.unregister(probe)
+    assert seen[0] == (4, 1)
+    assert seen[-1] == (5004, 2)

@@ -56,3 +56,20 @@ class Box(Boundary):
             pts.append(p)
             nrm.append(n)
         return np.array(pts), np.array(nrm)
+
+    def surface(self, extent: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """(vertices, faces) of the box's closed faces (for viewing: the planes are
+        infinite, the box's faces are its rectangles)."""
+        verts, faces = [], []
+        lo, hi = self.lower, self.upper
+        for f in self.faces:
+            axis = "xyz".index(f[1])
+            a, b = [d for d in range(3) if d != axis]
+            value = lo[axis] if f[0] == "-" else hi[axis]
+            k = len(verts)
+            for sa, sb in ((lo[a], lo[b]), (hi[a], lo[b]), (hi[a], hi[b]), (lo[a], hi[b])):
+                p = np.zeros(3)
+                p[axis], p[a], p[b] = value, sa, sb
+                verts.append(p)
+            faces += [(k, k + 1, k + 2), (k, k + 2, k + 3)]
+        return np.asarray(verts).reshape(-1, 3), np.asarray(faces, np.int64).reshape(-1, 3)

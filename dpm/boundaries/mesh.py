@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -20,10 +21,50 @@ FLAT_ANGLE = 1e-6
 DEGENERATE = 1e-6
 
 
+def rotation_matrix(call: str, spec: Any) -> np.ndarray:
+    """The 3x3 matrix of a mesh's ``rotate``: None (identity), ``(ax, ay, az, degrees)``,
+    a list of those (the first applied first), or a proper rotation matrix."""
+    allowed = "allowed: (ax, ay, az, degrees), a list of them, or a 3x3 rotation matrix"
+    if spec is None:
+        return np.eye(3)
+    if isinstance(spec, np.ndarray):
+        spec = spec.tolist()  # (named on one line)
+    try:
+        a = np.asarray(spec, float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{call}: rotate={spec!r}; {allowed}") from None
+    if not np.all(np.isfinite(a)):
+        raise ParameterError(f"{call}: rotate={spec!r} is not finite; {allowed}")
+    if a.shape == (3, 3):
+        if not (np.allclose(a @ a.T, np.eye(3), atol=1e-9) and np.linalg.det(a) > 0):
+            raise ParameterError(f"{call}: rotate={spec!r} is not a rotation matrix "
+                                 "(orthonormal, determinant +1)")
+        return a
+    if a.shape == (4,):
+        a = a[None]
+    if a.ndim != 2 or a.shape[1] != 4:
+        raise ParameterError(f"{call}: rotate={spec!r}; {allowed}")
+    r = np.eye(3)
+    for ax, ay, az, deg in a:
+        n = np.array([ax, ay, az])
+        norm = float(np.linalg.norm(n))
+        if norm == 0.0:
+            raise ParameterError(f"{call}: rotate={spec!r} has a zero axis; {allowed}")
+        n /= norm
+        t = np.radians(deg)
+        k = np.array([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
+        r = (np.eye(3) + np.sin(t) * k + (1 - np.cos(t)) * k @ k) @ r  # (Rodrigues)
+    return r
+
+
 class Mesh(Boundary):
     """A triangle mesh from ``file`` (read by trimesh) or from ``vertices`` (n, 3) and
-    ``faces`` (m, 3), scaled by ``scale`` then shifted by ``translate``; ``thickness``
-    makes each triangle a plate (default 0, a surface).
+    ``faces`` (m, 3), in the file's units scaled by ``scale`` (1e-3: a CAD file in mm),
+    then turned by ``rotate`` about the file's origin, then shifted by ``translate`` [m]:
+    x = R (scale x_file) + translate. ``rotate`` is ``(ax, ay, az, degrees)`` (right-handed
+    about the axis), a list of those applied in order (LIGGGHTS' ``rotate axis ... angle``
+    repeated), or a 3x3 rotation matrix. ``thickness`` makes each triangle a plate
+    (default 0, a surface).
 
     Contact (kernel kind TRIANGLE): closest point of each triangle within reach of the
     sphere (Ericson 2005), both sides. Shared edges and vertices are counted once
@@ -53,6 +94,8 @@ class Mesh(Boundary):
         "faces": Parameter(default=None, kind="any"),
         "scale": Parameter(default=1.0, low=0.0, low_open=True),
         "translate": Parameter(default=(0.0, 0.0, 0.0), kind="vector", unit="m"),
+        "rotate": Parameter(default=None, kind="any",
+                            doc="(ax, ay, az, degrees), a list of them, or a 3x3 matrix"),
         "thickness": Parameter(default=0.0, low=0.0, unit="m"),
         "side": Parameter(default="auto", kind="str",
                           doc="where the particles belong: auto, inside, outside, both"),
@@ -103,8 +146,9 @@ class Mesh(Boundary):
             raise ParameterError(f"{call}: side={p['side']!r} needs a closed (watertight) "
                                  "mesh; this one has open edges (use side='both')")
         self.trimesh = tm
-        self.vertices = np.asarray(tm.vertices, float) * float(p["scale"]) + np.asarray(
-            p["translate"], float)
+        self.rotation = rotation_matrix(call, p["rotate"])
+        self.vertices = (np.asarray(tm.vertices, float) * float(p["scale"])) @ self.rotation.T \
+            + np.asarray(p["translate"], float)
         self.faces = np.asarray(tm.faces, np.int64)
         self.h = 0.5 * float(p["thickness"])
         #: where the particles belong ("inside", "outside" or None: anywhere)
@@ -123,6 +167,10 @@ class Mesh(Boundary):
             return np.zeros(len(position), bool)
         inside = contains(self.vertices, self.faces, position)
         return ~inside if self.side == "inside" else inside
+
+    def surface(self, extent: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """(vertices, faces) for viewing: the mesh itself (its mid surface)."""
+        return self.vertices, self.faces
 
     def volume(self) -> float:
         """Enclosed volume [m3] of a watertight mesh; else the surface area times the

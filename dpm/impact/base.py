@@ -114,7 +114,8 @@ class ImpactModel:
         self.call = call or f"{type(self).__name__}()"
         self.params = validate(self.call, self.parameters, params)
         rm = self.params.get("rolling_model", "constant_torque")
-        allowed = self.rolling_parts if self.normal is not None else ROLLING_MODELS
+        allowed = (self._rolling_choices() if self.normal is not None
+                   else list(ROLLING_MODELS))
         if rm not in allowed:
             raise ParameterError(f"{self.call}: rolling_model={rm!r}; allowed: "
                                  f"{', '.join(allowed)}")
@@ -123,8 +124,19 @@ class ImpactModel:
     def rolling(self) -> Part | None:
         """The rolling part of this instance (None without rolling resistance)."""
         if float(self.params.get("rolling_friction", 0.0) or 0.0) > 0.0:
-            return self.rolling_parts[self.params.get("rolling_model", "constant_torque")]
+            rm = self.params.get("rolling_model", "constant_torque")
+            if rm in self.rolling_parts:
+                return self.rolling_parts[rm]
+            from ..plugins import registry
+
+            return registry().lookup("rolling_model", rm, self.call)()  # a plugin's
         return None
+
+    def _rolling_choices(self) -> list[str]:
+        """Rolling models a composed law takes: its own, and those plugins register."""
+        from ..plugins import registry
+
+        return sorted(set(self.rolling_parts) | set(registry().names("rolling_model")))
 
     def parts(self) -> tuple[Part, ...]:
         """The parts of this instance: normal, tangential, adhesion, rolling (those set)."""

@@ -43,7 +43,13 @@ FIELDS = {
     "radius": (0, "f8", "radius"),
     "mass": (0, "f8", "mass"),
     "material": (0, "i4", "material"),
+    "shape": (0, "i4", "shape"),
 }
+#: units of the datasets (the ``unit`` attribute of each; "" dimensionless)
+UNITS = {"position": "m", "velocity": "m/s", "orientation": "", "angular_velocity": "rad/s",
+         "radius": "m", "mass": "kg", "time": "s", "residence_time": "s", "force": "N",
+         "torque": "N m", "kinetic_energy": "J", "work": "J", "dissipated": "J",
+         "surface": "m", "pose": "m (origin), 1 (rotation)", "local_vertices": "m"}
 #: per-element fields of clustered bodies: name -> (width, dtype)
 ELEMENT_FIELDS = {"position": (3, "f8"), "radius": (0, "f8"), "body_id": (0, "i8")}
 #: records of removed bodies (outlets): name -> (width, dtype)
@@ -176,6 +182,8 @@ def _layout(f: Any, sim: Simulation) -> None:
     f.attrs["integrator"] = sim.integrator.name
     f.attrs["materials"] = [m.name for m in sim.materials] or [""]
     f.attrs["boundaries"] = [b.name for b in sim.boundaries] or [""]
+    f.attrs["shapes"] = list(sim.shape_names) or [""]
+    f.attrs["units"] = "SI: m, s, kg, N, rad (each dataset's unit attribute)"
 
     def group(name: str, fields: dict[str, tuple[int, str]], rows: int) -> None:
         g = f.create_group(name)
@@ -195,8 +203,51 @@ def _layout(f: Any, sim: Simulation) -> None:
     for name in ("force", "torque"):
         bg.create_dataset(name, shape=(0, nb, 3), maxshape=(None, nb, 3), dtype="f8",
                           chunks=(64, nb, 3))
+    # the boundaries' surfaces (triangles, dpm.io.surfaces): in their own frames once,
+    # then per frame each boundary's pose and the world vertices (for ParaView)
+    local, faces, owner, vowner = boundary_surfaces(sim)
+    sg = f.create_group("surfaces")
+    sg.create_dataset("local_vertices", data=local)
+    sg.create_dataset("vertex_boundary", data=vowner)
+    sg.create_dataset("faces", data=faces)
+    sg.create_dataset("boundary", data=owner)
+    nv = max(len(local), 1)
+    bg.create_dataset("pose", shape=(0, nb, 12), maxshape=(None, nb, 12), dtype="f8",
+                      chunks=(64, nb, 12))
+    bg.create_dataset("surface", shape=(0, nv, 3), maxshape=(None, nv, 3), dtype="f8",
+                      chunks=(max(1, min(64, (1 << 20) // (24 * nv))), nv, 3))
     group("removed", REMOVED_FIELDS, 1024)
     _thermo_layout(f)
+    for g in f.values():
+        for name, ds in g.items():
+            if name in UNITS:
+                ds.attrs["unit"] = UNITS[name]
+
+
+def boundary_surfaces(sim: Simulation) -> tuple[np.ndarray, ...]:
+    """(local vertices (V, 3), faces (T, 3), boundary of each face (T,), boundary of each
+    vertex (V,)) of every boundary's surface (:mod:`dpm.io.surfaces`); planes are drawn
+    over the particles' bounding box, widened by half."""
+    from .surfaces import boundary_surface
+
+    pos = sim.bodies.position
+    if len(pos):
+        lo, hi = pos.min(axis=0), pos.max(axis=0)
+        centre, extent = 0.5 * (lo + hi), 0.75 * float(np.max(hi - lo)) + 1e-3
+    else:
+        centre, extent = np.zeros(3), 1.0
+    verts, faces, owner, vowner, n = [], [], [], [], 0
+    for k, bd in enumerate(sim.boundaries):
+        v, fc = boundary_surface(bd, extent, centre)
+        verts.append(v)
+        faces.append(fc + n)
+        owner.append(np.full(len(fc), k, np.int32))
+        vowner.append(np.full(len(v), k, np.int32))
+        n += len(v)
+    if not verts:
+        return (np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32),
+                np.zeros(0, np.int32))
+    return tuple(np.concatenate(a) for a in (verts, faces, owner, vowner))
 
 
 def _thermo_layout(f: Any) -> None:
@@ -289,8 +340,8 @@ class Writer:
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
-        for s in sidecars(self.path):  # those of a replaced file describe other frames
-            s.unlink(missing_ok=True)
+        for s in (*sidecars(self.path), self.path.with_suffix(".boundaries.xdmf")):
+            s.unlink(missing_ok=True)  # (those of a replaced file describe other frames)
         self._open()
         _start_counts(self, sim)
 
@@ -298,6 +349,7 @@ class Writer:
         self.file = h5py.File(self.path, "r+", libver="latest")
         self.file.swmr_mode = True
         self._last_xdmf = 0.0
+        self._local = None  # the surfaces' local vertices (read at the first frame)
 
     @classmethod
     def resume(cls, path: str | Path, sim: Simulation, frames: int, removed: int) -> Writer:
@@ -403,6 +455,8 @@ class Writer:
             for k, bd in enumerate(sim.boundaries):
                 vals[k] = getattr(bd, name)
             ds[self.frames] = vals
+        if "pose" in bg:
+            self._write_surfaces(sim, bg, nb)
         m = len(sim.elements) if self.clusters else 0
         if m:
             e = sim.elements
@@ -430,6 +484,28 @@ class Writer:
         if self.frames == 1 or now - self._last_xdmf > XDMF_INTERVAL_S:
             self.write_xdmf()
             self._last_xdmf = now
+
+    def _write_surfaces(self, sim: Simulation, bg: Any, nb: int) -> None:
+        """This frame's pose of every boundary and the world vertices of its surface."""
+        from ..motion import frames as motion_frames
+        from .surfaces import world
+
+        pose = np.zeros((nb, 12))
+        pose[:, 3:12] = np.eye(3).ravel()
+        for k, bd in enumerate(sim.boundaries):
+            pose[k] = motion_frames(bd.motion, np.array([sim.time]))[0, :12]
+        if self._local is None:
+            sg = self.file["surfaces"]
+            self._local = (sg["local_vertices"][:], sg["vertex_boundary"][:])
+        local, owner = self._local
+        xyz = np.zeros(bg["surface"].shape[1:])
+        for k in range(len(sim.boundaries)):
+            sel = owner == k
+            xyz[:len(local)][sel] = world(local[sel], pose[k])
+        for name, value in (("pose", pose), ("surface", xyz)):
+            ds = bg[name]
+            ds.resize(self.frames + 1, axis=0)
+            ds[self.frames] = value
 
     def write_removed(self, records: dict[str, np.ndarray], outlet: int) -> None:
         """Append the records of bodies an outlet removed (``id`` extended last)."""
@@ -474,7 +550,13 @@ class Writer:
         fr = self.file["frames"]
         k = self.frames
         write_xdmf_from_arrays(self.path, fr["time"][:k], fr["start"][:k], fr["count"][:k],
-                               self.rows)
+                               self.rows, fields=set(self.file["particles"]))
+        if "surfaces" in self.file and len(self.file["surfaces/faces"]):
+            from .xdmf import write_boundaries_xdmf
+
+            write_boundaries_xdmf(self.path, fr["time"][:k],
+                                  self.file["boundaries/surface"].shape[1],
+                                  len(self.file["surfaces/faces"]))
         if self.clusters:
             write_xdmf_from_arrays(self.path, fr["time"][:k], fr["element_start"][:k],
                                    fr["element_count"][:k], self.element_rows,
@@ -557,7 +639,9 @@ def _rebuild(path: Path, sizes: dict[str, int]) -> None:
                 for name, ds in g.items():
                     rows = min(ds.shape[0], sizes.get(gname, ds.shape[0]))
                     new = out.create_dataset(name, shape=(rows,) + ds.shape[1:],
-                                             maxshape=ds.maxshape, dtype=ds.dtype,
+                                             # (a contiguous dataset stays contiguous)
+                                             maxshape=ds.maxshape if ds.chunks else None,
+                                             dtype=ds.dtype,
                                              chunks=ds.chunks, compression=ds.compression,
                                              compression_opts=ds.compression_opts)
                     new.attrs.update(ds.attrs)
@@ -621,7 +705,8 @@ class Run:
         k = self._index(k)
         a, n = int(self.start[k]), int(self.count[k])
         with _open(self.path) as f:
-            out = {name: f["particles"][name][a:a + n] for name in FIELDS}
+            out = {name: f["particles"][name][a:a + n] for name in FIELDS
+                   if name in f["particles"]}  # (a file before "shape" lacks it)
         out["time"] = float(self.times[k])
         out["step"] = int(self.steps[k])
         return out

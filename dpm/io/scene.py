@@ -73,31 +73,33 @@ from ..simulation import Simulation
 
 _TOP = {"simulation", "materials", "contacts", "boundaries", "particles", "output", "run",
         "periodic", "inlets", "outlets"}
-_MOTIONS = {"translation": "Translation", "rotation": "Rotation", "oscillation": "Oscillation",
-            "triangular_oscillation": "TriangularOscillation", "tumbling": "Tumbling"}
-
-
 def _motion(where: str, spec: Any) -> Any:
+    """A motion table ``{ type = "name", ... }`` (a registered motion, built-in or a
+    plugin's), or a list of them (composed, applied in order)."""
     from .. import motion as mo
+    from ..plugins import registry
 
     if isinstance(spec, list):
         return mo.Compose(*[_motion(f"{where}[{k}]", s) for k, s in enumerate(spec)])
-    if not isinstance(spec, dict) or spec.get("type") not in _MOTIONS:
+    names = registry().names("motion")
+    if not isinstance(spec, dict) or spec.get("type") not in names:
         raise ParameterError(f"{where}: motion={spec!r} needs type = one of "
-                             f"{', '.join(_MOTIONS)}")
+                             f"{', '.join(names)}")
     kw = {k: (tuple(v) if isinstance(v, list) else v) for k, v in spec.items() if k != "type"}
-    return getattr(mo, _MOTIONS[spec["type"]])(**kw)
+    return registry().lookup("motion", spec["type"], where)(**kw)
 
 
 def _region(where: str, spec: Any) -> Any:
-    from ..regions import BoxRegion, CylinderRegion
+    """A region table ``{ name = {...} }`` of a registered region (box, cylinder, a
+    plugin's)."""
+    from ..plugins import registry
 
-    kinds = {"box": BoxRegion, "cylinder": CylinderRegion}
-    if not isinstance(spec, dict) or len(spec) != 1 or next(iter(spec)) not in kinds:
-        raise ParameterError(f"{where}: region={spec!r} must be {{ box = {{...}} }} or "
-                             "{ cylinder = {...} }")
+    names = registry().names("region")
+    if not isinstance(spec, dict) or len(spec) != 1 or next(iter(spec)) not in names:
+        raise ParameterError(f"{where}: region={spec!r} must be one of "
+                             + ", ".join(f"{{ {n} = {{...}} }}" for n in names))
     kind, kw = next(iter(spec.items()))
-    return kinds[kind](**kw)
+    return registry().lookup("region", kind, where)(**kw)
 
 
 def load_scene(path: str | Path, output: bool = True,

@@ -1,4 +1,10 @@
-"""XDMF sidecar so ParaView (Xdmf3 reader) opens a dpm HDF5 run as particles over time."""
+"""XDMF sidecars so ParaView opens a dpm HDF5 run over time: ``run.xdmf`` (particles),
+``run.elements.xdmf`` (the sphere elements of clustered bodies) and
+``run.boundaries.xdmf`` (every boundary's surface as triangles, moving with it).
+
+Read by ParaView's Xdmf3 reader and by VTK's ``vtkXdmfReader`` (the tests read every value
+back with the latter).
+"""
 
 from __future__ import annotations
 
@@ -18,6 +24,8 @@ _ATTRS = {
     "orientation": (4, "Float", 8),
     "radius": (0, "Float", 8),
     "mass": (0, "Float", 8),
+    "material": (0, "Int", 4),
+    "shape": (0, "Int", 4),
 }
 
 
@@ -39,12 +47,14 @@ _ELEMENT_ATTRS = {"radius": (0, "Float", 8), "body_id": (0, "Int", 8)}
 
 
 def write_xdmf_from_arrays(h5path: Path, times, starts, counts, rows: int,
-                           group: str = "particles") -> Path:
+                           group: str = "particles", fields: set[str] | None = None) -> Path:
     """Write ``<run>.xdmf`` (particles) or ``<run>.elements.xdmf`` (the sphere elements of
     clustered bodies, ``group="elements"``) beside ``h5path`` for the given frame table."""
     h5path = Path(h5path)
     name = h5path.name
     attrs = _ATTRS if group == "particles" else _ELEMENT_ATTRS
+    if fields is not None:  # (a file written before a field existed lacks it)
+        attrs = {k: v for k, v in attrs.items() if k in fields}
     out = ['<?xml version="1.0" ?>', '<Xdmf Version="3.0"><Domain>',
            f'<Grid Name="{group}" GridType="Collection" CollectionType="Temporal">']
     for t, a, n in zip(times, starts, counts, strict=True):
@@ -54,14 +64,47 @@ def write_xdmf_from_arrays(h5path: Path, times, starts, counts, rows: int,
                    f'<Geometry GeometryType="XYZ">'
                    f'{_slab(name, "position", a, n, 3, rows, "Float", 8, group)}</Geometry>')
         for field, (w, ntype, prec) in attrs.items():
-            kind = {0: "Scalar", 3: "Vector", 4: "Matrix"}[w]
+            # (a quaternion is a "Vector" of 4: "Matrix" reads as one tuple of 4 n values)
+            kind = "Scalar" if w == 0 else "Vector"
             out.append(f'<Attribute Name="{field}" AttributeType="{kind}" Center="Node">'
                        f'{_slab(name, field, a, n, w, rows, ntype, prec, group)}</Attribute>')
         out.append("</Grid>")
     out.append("</Grid></Domain></Xdmf>")
     path = h5path.with_suffix(".xdmf" if group == "particles" else ".elements.xdmf")
-    # atomic: a kill never leaves a half-written sidecar (a unique temporary name, so two
-    # processes rewriting the same sidecar do not mix their writes)
+    return _publish_text(path, out)
+
+
+def write_boundaries_xdmf(h5path: Path, times, nverts: int, nfaces: int) -> Path:
+    """Write ``<run>.boundaries.xdmf``: per frame the triangles of every boundary
+    (``/surfaces/faces``) at that frame's world vertices (``/boundaries/surface``), with
+    the boundary index of each triangle as a cell attribute."""
+    h5path = Path(h5path)
+    name = h5path.name
+    nf = len(times)
+    out = ['<?xml version="1.0" ?>', '<Xdmf Version="3.0"><Domain>',
+           '<Grid Name="boundaries" GridType="Collection" CollectionType="Temporal">']
+    for k, t in enumerate(times):
+        out.append(
+            f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
+            f'<Topology TopologyType="Triangle" NumberOfElements="{nfaces}">'
+            f'<DataItem Dimensions="{nfaces} 3" NumberType="Int" Precision="8" '
+            f'Format="HDF">{name}:/surfaces/faces</DataItem></Topology>'
+            f'<Geometry GeometryType="XYZ">'
+            f'<DataItem ItemType="HyperSlab" Dimensions="{nverts} 3" Type="HyperSlab">'
+            f'<DataItem Dimensions="3 3" Format="XML">{k} 0 0 1 1 1 1 {nverts} 3</DataItem>'
+            f'<DataItem Dimensions="{nf} {nverts} 3" NumberType="Float" Precision="8" '
+            f'Format="HDF">{name}:/boundaries/surface</DataItem></DataItem></Geometry>'
+            f'<Attribute Name="boundary" AttributeType="Scalar" Center="Cell">'
+            f'<DataItem Dimensions="{nfaces}" NumberType="Int" Precision="4" '
+            f'Format="HDF">{name}:/surfaces/boundary</DataItem></Attribute></Grid>')
+    out.append("</Grid></Domain></Xdmf>")
+    return _publish_text(h5path.with_suffix(".boundaries.xdmf"), out)
+
+
+def _publish_text(path: Path, out: list[str]) -> Path:
+    """Write the lines ``out`` to ``path`` atomically: a kill never leaves a half-written
+    sidecar (a unique temporary name, so two processes rewriting the same sidecar do not
+    mix their writes)."""
     from .hdf5 import _temp_beside
 
     tmp = _temp_beside(path)
@@ -85,5 +128,9 @@ def write_xdmf(h5path: str | Path) -> Path:
             write_xdmf_from_arrays(Path(h5path), f["frames/time"][:n],
                                    f["frames/element_start"][:n], f["frames/element_count"][:n],
                                    len(f["elements/radius"]), group="elements")
+        if "surfaces" in f and len(f["surfaces/faces"]):
+            write_boundaries_xdmf(Path(h5path), f["frames/time"][:n],
+                                  f["boundaries/surface"].shape[1], len(f["surfaces/faces"]))
         return write_xdmf_from_arrays(Path(h5path), f["frames/time"][:n], f["frames/start"][:n],
-                                      f["frames/count"][:n], len(f["particles/id"]))
+                                      f["frames/count"][:n], len(f["particles/id"]),
+                                      fields=set(f["particles"]))

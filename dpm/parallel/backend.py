@@ -57,10 +57,11 @@ from .local import Entries, LocalScene, Pool, assemble, element_rows, set_entrie
 
 
 class MpiBackend(CpuBackend):
-    """Domain decomposition over MPI ranks (module docstring). On one rank it is the CPU
-    backend. ``threads`` are each rank's threads (MPI x threads); ``rebalance`` the
-    imbalance (largest over mean step time of the ranks) above which a call's start cuts
-    the domain again."""
+    """Domain decomposition over MPI ranks: one sub-domain per rank, ghosts, migration with
+    contact history (the module docstring says how). On one rank it is the CPU backend.
+    ``threads`` are each rank's threads (MPI x threads); ``rebalance`` the imbalance
+    (largest over mean step time of the ranks) above which a call's start cuts the domain
+    again."""
 
     name = "mpi"
 

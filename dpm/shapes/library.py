@@ -1,4 +1,4 @@
-"""Ready-made sphere clusters stored as files (the repository's ``shapes/`` folder).
+"""Ready-made sphere clusters stored as files (``dpm/shapes/grains/``, installed with dpm).
 
 File format (``<name>.json``, UTF-8 JSON, SI units; format name ``dpm-sphere-cluster``,
 version 1) with the source mesh ``<name>.stl`` beside it::
@@ -42,8 +42,8 @@ from .geometry import matrix_from_quaternion
 
 FORMAT = "dpm-sphere-cluster"
 VERSION = 1
-#: the repository's library folder
-LIBRARY_DIR = Path(__file__).resolve().parents[2] / "shapes"
+#: the library folder (package data: installed with dpm)
+LIBRARY_DIR = Path(__file__).resolve().parent / "grains"
 
 
 def names() -> list[str]:
@@ -114,14 +114,18 @@ class LibraryShape(ClusterShape):
 
     name = "library"
     parameters = {"path": Parameter(kind="str", doc="library .json file or library name")}
+    _grain: str | None = None  # (set by the class of one grain: see shape_class)
 
     def __init__(self, call: str | None = None, **params: Any) -> None:
         super().__init__(call=call, **params)
-        p = find(self.params["path"])
+        path = self._grain or self.params["path"]
+        p = find(path)
         if p is None:
-            raise ParameterError(f"{self.call}: path={self.params['path']!r} is no library "
+            raise ParameterError(f"{self.call}: path={path!r} is no library "
                                  f"file (library shapes: {', '.join(names()) or 'none'})")
         self.file = p
+        if self._grain is None:  # (the output's shape name: library:rock, a grain's: rock)
+            self.name = f"library:{p.stem}"
         try:
             doc = json.loads(p.read_text())
         except (OSError, ValueError) as exc:
@@ -200,3 +204,28 @@ class LibraryShape(ClusterShape):
 def load(path: str | Path) -> LibraryShape:
     """A library shape from a ``.json`` file or a library name (``load("rock")``)."""
     return LibraryShape(call=f"dpm.shapes.library.load({str(path)!r})", path=str(path))
+
+
+_BY_NAME: dict[str, type] = {}
+
+
+def shape_class(name: str) -> type | None:
+    """A shape class for the library grain ``name`` (``"rock"``): what the registry
+    returns for a shape name no plugin registers, so that a scene file, an inlet or
+    ``sim.add_particles("rock", ...)`` can name a grain; None if there is no such grain."""
+    if not isinstance(name, str) or find(name) is None or Path(name).suffix:
+        return None
+    if name not in _BY_NAME:
+        _BY_NAME[name] = type(f"Library_{name}", (LibraryShape,), {
+            "name": name, "parameters": {}, "_grain": name, "__module__": __name__,
+            "__doc__": f"Library grain {name!r} ({LIBRARY_DIR.name}/{name}.json)."})
+    return _BY_NAME[name]
+
+
+def __getattr__(attr: str) -> type:
+    """``Library_rock``: the class of a grain, so that a pickled one (an inlet's shape in a
+    checkpoint) loads in a new process."""
+    cls = shape_class(attr[len("Library_"):]) if attr.startswith("Library_") else None
+    if cls is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {attr!r}")
+    return cls
