@@ -713,21 +713,25 @@ class Simulation:
         else:
             validate("sim.run()", {"until": Parameter(low=self.time, unit="s")},
                      {"until": until})
-        if steps is not None:
-            nsteps = int(steps)
-        else:
-            nsteps = max(0, math.ceil((until - self.time) / self.dt - 1e-9))
+        def wanted() -> int:
+            if steps is not None:
+                return int(steps)
+            return max(0, math.ceil((until - self.time) / self.dt - 1e-9))
+
         if not self._prepared:
             if self.inlets and not self._forces_valid and (
                     self.step_count == 0 or len(self.bodies) == 0):
                 population.flow_event(self)  # an inlet may fill an empty scene
-                if len(self.bodies) == 0:
-                    nsteps -= population.wait_for_inlets(self, nsteps)
+                if len(self.bodies) == 0 and math.isfinite(self.dt):  # (dt="auto": no)
+                    skipped = population.wait_for_inlets(self, wanted())
+                    if steps is not None:
+                        steps = int(steps) - skipped
                     if len(self.bodies) == 0:
                         return  # (the inlets start later than this run ends)
             self._prepare()
         elif not self._dt_checked:  # dt (or dt_check) changed since the last run
             self._check_time_step()
+        nsteps = wanted()
         threads_before = numba.get_num_threads()
         numba.set_num_threads(self.backend.thread_count(len(self.elements)))
         try:

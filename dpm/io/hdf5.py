@@ -182,7 +182,7 @@ def _layout(f: Any, sim: Simulation) -> None:
     f.attrs["integrator"] = sim.integrator.name
     f.attrs["materials"] = [m.name for m in sim.materials] or [""]
     f.attrs["boundaries"] = [b.name for b in sim.boundaries] or [""]
-    f.attrs["shapes"] = list(sim.shape_names) or [""]
+    f.attrs["shapes"] = list(getattr(sim, "shape_names", [])) or [""]
     f.attrs["units"] = "SI: m, s, kg, N, rad (each dataset's unit attribute)"
 
     def group(name: str, fields: dict[str, tuple[int, str]], rows: int) -> None:
@@ -445,7 +445,8 @@ class Writer:
         for name, (_, _, attr) in FIELDS.items():
             ds = g[name]
             ds.resize(self.rows + n, axis=0)
-            ds[self.rows:self.rows + n] = getattr(b, attr)
+            value = getattr(b, attr, None)  # (a stand-in state may lack the shape)
+            ds[self.rows:self.rows + n] = 0 if value is None else value
         bg = self.file["boundaries"]
         nb = bg["force"].shape[1]
         for name in ("force", "torque"):
@@ -493,7 +494,7 @@ class Writer:
         pose = np.zeros((nb, 12))
         pose[:, 3:12] = np.eye(3).ravel()
         for k, bd in enumerate(sim.boundaries):
-            pose[k] = motion_frames(bd.motion, np.array([sim.time]))[0, :12]
+            pose[k] = motion_frames(getattr(bd, "motion", None), np.array([sim.time]))[0, :12]
         if self._local is None:
             sg = self.file["surfaces"]
             self._local = (sg["local_vertices"][:], sg["vertex_boundary"][:])

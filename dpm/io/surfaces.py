@@ -150,6 +150,8 @@ def boundary_surface(bd: Any, extent: float = 1.0, centre: np.ndarray | None = N
     if callable(own):
         v, f = own(extent)
         return np.asarray(v, float).reshape(-1, 3), np.asarray(f, np.int64).reshape(-1, 3)
+    if not hasattr(bd, "primitives"):  # (no geometry to draw)
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
     prims = bd.primitives()
     verts, faces, n = [], [], 0
     for k in range(len(prims.kind)):
