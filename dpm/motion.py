@@ -50,6 +50,14 @@ class Motion:
     #: time scale of the motion [s] (sets the finite-difference step of the default rates)
     time_scale: float = 1.0
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        # help(), inspect.signature and the docs list the declared parameters (with units
+        # and ranges in the docstring) though __init__ takes them as **params
+        super().__init_subclass__(**kwargs)
+        from .boundaries.signature import document
+
+        document(cls)
+
     def __init__(self, **params: Any) -> None:
         self.params = validate(f"{type(self).__name__}()", self.parameters, params)
 

@@ -3,6 +3,7 @@ and the event schedule; the steps themselves run in the backend (:mod:`dpm.backe
 
 from __future__ import annotations
 
+import inspect
 import math
 import os
 import time as _time
@@ -376,7 +377,23 @@ class Simulation:
         return law
 
     def add_boundary(self, kind: str, material: Material, **params: Any) -> Boundary:
-        """Add a boundary of a registered kind (``plane``, ``box``, ...); return it."""
+        """Add a boundary of a registered kind (``plane``, ``box``, ...); return it.
+
+        Parameters
+        ----------
+        kind : str
+            a registered boundary name: the built-in kinds below, or a plugin's (``dpm
+            plugins`` lists them; ``help(dpm.registry().lookup("boundary", kind))`` shows
+            one's parameters).
+        material : Material
+            the boundary's material (its contact laws with the particles' materials are
+            set by :meth:`contact`).
+        **params
+            the kind's parameters as keywords, and ``motion`` (a :class:`dpm.Motion`,
+            default None: at rest). An unknown or misspelt name, a missing required one or
+            a value out of range raises :class:`~dpm.errors.ParameterError` naming the
+            call, the parameter, its value and what is allowed.
+        """
         call = f"sim.add_boundary({kind!r})"
         cls = self._registry.lookup("boundary", kind, call)
         self._material_index(material, call)
@@ -457,12 +474,52 @@ class Simulation:
         self._force_snapshot = None
 
 
-    def add_inlet(self, region: Region, material: Material, **params: Any) -> Inlet:
-        """Insert particles during the run (:class:`dpm.flow.Inlet`: ``rate`` or
-        ``mass_rate``, ``shapes`` mix or ``shape`` + parameters, ``velocity``, ``start``,
-        ``stop``, ``every``, ``seed``); return the inlet."""
+    def add_inlet(self, region: Region, material: Material, *, rate: float | None = None,
+                  mass_rate: float | None = None, shapes: Sequence[dict] | None = None,
+                  shape: str = "sphere", velocity: Sequence[float] = (0.0, 0.0, 0.0),
+                  start: float = 0.0, stop: float = math.inf, every: float = 1e-3,
+                  seed: int = 0, random_orientation: bool = True, max_attempts: int = 30,
+                  **shape_params: Any) -> Inlet:
+        """Insert particles during the run; return the inlet (:class:`dpm.flow.Inlet`,
+        whose docstring gives the insertion rules).
+
+        Parameters
+        ----------
+        region : Region
+            where bodies are placed (:class:`dpm.BoxRegion`, :class:`dpm.CylinderRegion`).
+        material : Material
+            their material.
+        rate : float, optional
+            bodies per second [1/s] (give ``rate`` or ``mass_rate``).
+        mass_rate : float, optional
+            mass per second [kg/s].
+        shapes : list of dict, optional
+            a mix: ``[{"shape": name, "fraction": f, **parameters}, ...]``; a parameter
+            given as a pair ``(low, high)`` is drawn uniformly per body.
+        shape : str
+            without ``shapes``: the one shape inserted (default ``"sphere"``), its
+            parameters given as further keywords (e.g. ``radius=(1e-3, 2e-3)``).
+        velocity : 3-vector
+            initial velocity [m/s] (default 0).
+        start, stop : float
+            the inlet's time window [s] (default 0 to inf: never stops).
+        every : float
+            interval between insertions [s] (default 1e-3).
+        seed : int
+            random seed (default 0): the insertion is reproducible.
+        random_orientation : bool
+            uniform random orientations (default True).
+        max_attempts : int
+            places tried per body at each event (default 30).
+        **shape_params
+            the shape's parameters when ``shapes`` is not given; a misspelt inlet or
+            shape parameter raises :class:`~dpm.errors.ParameterError` naming it.
+        """
         self._material_index(material, "sim.add_inlet()")
-        inlet = Inlet(region, material, **params)
+        inlet = Inlet(region, material, rate=rate, mass_rate=mass_rate, shapes=shapes,
+                      shape=shape, velocity=velocity, start=start, stop=stop, every=every,
+                      seed=seed, random_orientation=random_orientation,
+                      max_attempts=max_attempts, **shape_params)
         self.inlets.append(inlet)
         self._scene_box = None
         return inlet
@@ -1036,3 +1093,23 @@ def _rows(call: str, name: str, value: Any, width: int, n: int | None = None) ->
         raise ParameterError(f"{call}: {name} contains NaN or inf (row {row})")
     return np.ascontiguousarray(arr)
 
+
+def _boundary_kinds_doc() -> str:
+    """The built-in boundary kinds and their parameters, for ``add_boundary``'s docstring
+    (generated from the classes' declared parameters, so it cannot fall behind)."""
+    from . import boundaries as b
+    from .boundaries.signature import describe
+
+    lines = ["Notes", "-----", "Built-in kinds, with each parameter's unit, range and default",
+             "(``help(dpm.boundaries.Tube)`` etc. give the geometry):", ""]
+    for kind, cls in (("plane", b.Plane), ("box", b.Box), ("wall", b.Wall), ("tube", b.Tube),
+                      ("bend", b.Bend), ("mesh", b.Mesh), ("sieve", b.Sieve),
+                      ("orifice_plate", b.OrificePlate)):
+        lines.append(f"``{kind}`` (:class:`~dpm.boundaries.{cls.__name__}`)")
+        lines += [f"    - ``{name}``: {describe(name, p)}" for name, p in cls.parameters.items()]
+        lines.append("")
+    return "\n".join(lines)
+
+
+Simulation.add_boundary.__doc__ = (inspect.cleandoc(Simulation.add_boundary.__doc__ or "")
+                                   + "\n\n" + _boundary_kinds_doc())

@@ -71,6 +71,21 @@ class Boundary:
     #: False while switched off (:meth:`dpm.Simulation.switch_off`, :mod:`dpm.switches`)
     enabled: bool = True
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        # help(), inspect.signature and the docs list the declared parameters (with units
+        # and ranges in the docstring) though __init__ takes them as **params
+        super().__init_subclass__(**kwargs)
+        from ..motion import Motion
+        from .signature import document, keyword
+
+        document(cls, leading=(keyword("material", ann=Material, positional=True),
+                               keyword("call", None, str | None, positional=True)),
+                 trailing=(keyword("motion", None, Motion | None),),
+                 extra=(("material", "Material", "the boundary's material (required)"),
+                        ("motion", "Motion or None", "prescribed motion of its frame "
+                         "(dpm.Rotation, dpm.Oscillation, ...; default None: at rest)"),
+                        ("call", "str or None", "the call named in error messages")))
+
     def __init__(self, material: Material, call: str | None = None, motion: Any = None,
                  **params: Any) -> None:
         call = call or f"{type(self).__name__}()"
