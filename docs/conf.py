@@ -7,10 +7,10 @@ comes from the docstrings (autodoc, numpy style through napoleon).
 
 from __future__ import annotations
 
-import os
 import sys
+from pathlib import Path
 
-sys.path.insert(0, os.path.abspath(".."))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import dpm  # noqa: E402
 

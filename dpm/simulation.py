@@ -93,6 +93,8 @@ class Simulation:
         ``mpiexec`` runs a whole copy of the scene on each rank. The script is the same
         for every backend (:mod:`dpm.backends.base`).
 
+    Notes
+    -----
     The order of a step and of the events around it is given in :meth:`run`.
 
     Example

@@ -17,8 +17,8 @@ class Wall(Boundary):
     half extents ``half_extents`` = (a, b) along u and v = normal x u, as a plate of
     ``thickness`` (0: a sheet).
 
-    Contact (kernel kind SLAB): the closest point of the box |s| <= a, |t| <= b,
-    |w| <= thickness / 2, so faces push along the normal from either side and edges and
+    Contact (kernel kind SLAB): the closest point of the box ``|s| <= a``, ``|t| <= b``,
+    ``|w| <= thickness / 2``, so faces push along the normal from either side and edges and
     corners act as rounded edges (the force points from the closest edge point to the
     sphere centre). Volume 4 a b thickness; it carries no mass (boundaries move by
     prescribed motions).
