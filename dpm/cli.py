@@ -134,6 +134,22 @@ def _cmd_clear_cache(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from . import validation
+
+    rows = validation.run(cases=args.case, quick=args.quick, models=args.model,
+                          progress=lambda text: print(text, file=sys.stderr, flush=True))
+    print(validation.table(rows))
+    if args.markdown:
+        Path(args.markdown).write_text(validation.table(rows, markdown=True) + "\n")
+    if args.json:
+        Path(args.json).write_text(validation.to_json(rows) + "\n")
+    failed = sum(not r.passed for r in rows)
+    print(f"{len(rows) - failed} of {len(rows)} rows within tolerance"
+          + (f"; {failed} FAILED" if failed else ""))
+    return 1 if failed else 0
+
+
 def main(argv: list[str] | None = None) -> int:
     from .plugins import version
 
@@ -195,6 +211,18 @@ def main(argv: list[str] | None = None) -> int:
     s.set_defaults(func=_cmd_shapes)
     sub.add_parser("clear-cache", help="delete compiled kernels and generated step modules"
                    ).set_defaults(func=_cmd_clear_cache)
+    v = sub.add_parser("validate", help="run the validation cases (Chung & Ooi 2011 impact "
+                       "benchmarks and analytic cases) and print the table; exit status 1 "
+                       "if a row is outside its tolerance (docs/validation.md)")
+    v.add_argument("--quick", action="store_true", help="fewer impacts, coarser steps")
+    v.add_argument("--model", action="append", default=None, metavar="NAME",
+                   help="only this impact model (repeatable)")
+    v.add_argument("--case", action="append", default=None, metavar="NAME",
+                   help="only this case: co1 ... co8, sandwich, rolling_stop (repeatable)")
+    v.add_argument("--markdown", default=None, metavar="FILE", help="also write the table "
+                   "as Markdown")
+    v.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
+    v.set_defaults(func=_cmd_validate)
     args = p.parse_args(argv)
     try:
         return args.func(args)
