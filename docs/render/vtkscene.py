@@ -10,6 +10,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import vtkmodules.vtkRenderingFreeType  # noqa: F401  (text)
+import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (the rendering backend)
 from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
 from vtkmodules.vtkCommonCore import vtkPoints
 from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
@@ -23,9 +25,6 @@ from vtkmodules.vtkRenderingCore import (
     vtkRenderWindow,
     vtkWindowToImageFilter,
 )
-
-import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (the rendering backend)
-import vtkmodules.vtkRenderingFreeType  # noqa: F401  (text)
 
 
 def polydata(vertices: np.ndarray, faces: np.ndarray) -> vtkPolyData:
