@@ -150,6 +150,15 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
+def _cmd_new_plugin(args: argparse.Namespace) -> int:
+    from .scaffold import new_plugin
+
+    root = new_plugin(args.name, args.dir)
+    print(f"created {root}: python -m pytest {root} runs its tests; pip install -e {root} "
+          "makes dpm find it (dpm plugins)")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     from .plugins import version
 
@@ -223,6 +232,11 @@ def main(argv: list[str] | None = None) -> int:
                    "as Markdown")
     v.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     v.set_defaults(func=_cmd_validate)
+    n = sub.add_parser("new-plugin", help="create a plugin package NAME (pyproject with the "
+                       "entry point, an impact model and a shape, tests with dpm.testing)")
+    n.add_argument("name", metavar="NAME", help="distribution name, e.g. dpm-pebbles")
+    n.add_argument("--dir", default=".", help="where to create NAME/ (default: here)")
+    n.set_defaults(func=_cmd_new_plugin)
     args = p.parse_args(argv)
     try:
         return args.func(args)

@@ -1,0 +1,73 @@
+"""A run-time hook that writes its own dataset into the run's HDF5 output.
+
+At every output frame, for the boundaries that an :class:`~dpm_contrib_example.motions.Orbit`
+moves, the hook reads the frame the engine stepped them with (``sim.walls.frame``: origin
+and origin velocity) and writes it under ``/contrib_example/orbit`` of the output file:
+``time`` (frames,), ``origin`` and ``velocity`` (frames, k, 3), attribute ``boundaries``
+(their indices in ``sim.boundaries``). Row ``frame`` is written at index ``frame``, so a
+run resumed from a checkpoint overwrites the rows after the checkpoint's frames. Scenes
+without an orbiting boundary get nothing. The same rows are kept in memory
+(:func:`recorded`).
+
+(HDF5 in single-writer/multiple-reader mode, as dpm writes its output, creates the group
+at the first frame; HDF5 1.10-1.14 refused new objects in that mode, HDF5 2.0 allows them.)
+"""
+
+from __future__ import annotations
+
+import weakref
+from typing import Any
+
+import numpy as np
+
+from .motions import Orbit
+
+#: where the datasets go in the output file
+GROUP = "contrib_example/orbit"
+
+_RECORDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def orbiting(sim: Any) -> list[int]:
+    """Indices of the boundaries of ``sim`` moved by an Orbit."""
+    return [k for k, b in enumerate(sim.boundaries) if isinstance(b.motion, Orbit)]
+
+
+def recorded(sim: Any) -> dict[str, np.ndarray]:
+    """What the hook recorded for ``sim``: frame, time, origin, velocity (arrays)."""
+    rows = _RECORDS.get(sim, [])
+    if not rows:
+        return {"frame": np.zeros(0, np.int64), "time": np.zeros(0),
+                "origin": np.zeros((0, 0, 3)), "velocity": np.zeros((0, 0, 3))}
+    return {"frame": np.array([r[0] for r in rows]), "time": np.array([r[1] for r in rows]),
+            "origin": np.array([r[2] for r in rows]), "velocity": np.array([r[3] for r in rows])}
+
+
+def on_output(sim: Any, frame: int) -> None:
+    ks = orbiting(sim)
+    if not ks or getattr(sim, "walls", None) is None:
+        return
+    fr = np.asarray(sim.walls.frame)
+    origin, velocity = fr[ks, 0:3].copy(), fr[ks, 12:15].copy()
+    rows = _RECORDS.setdefault(sim, [])
+    rows[:] = [r for r in rows if r[0] < frame]  # (a resumed run writes them again)
+    rows.append((frame, float(sim.time), origin, velocity))
+    f = getattr(sim.last_output, "file", None)
+    if f is None:  # no file on this process (an MPI rank other than 0)
+        return
+    g = f.require_group(GROUP)
+    n = len(ks)
+    if "time" not in g:
+        g.create_dataset("time", shape=(0,), maxshape=(None,), dtype="f8", chunks=(256,))
+        for name in ("origin", "velocity"):
+            g.create_dataset(name, shape=(0, n, 3), maxshape=(None, n, 3), dtype="f8",
+                             chunks=(256, n, 3))
+        g.attrs["boundaries"] = np.asarray(ks, np.int64)
+        g["time"].attrs["unit"] = "s"
+        g["origin"].attrs["unit"] = "m"
+        g["velocity"].attrs["unit"] = "m/s"
+    for name, value in (("origin", origin), ("velocity", velocity), ("time", sim.time)):
+        ds = g[name]
+        ds.resize(frame + 1, axis=0)
+        ds[frame] = value
+    f.flush()
