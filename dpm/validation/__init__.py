@@ -96,7 +96,9 @@ def run(cases: Sequence[str] | None = None, quick: bool = False,
     from ..errors import ParameterError
 
     _load()
-    names = list(CASES) if cases is None else list(cases)
+    # the Chung & Ooi tests first, then the analytic cases
+    names = (sorted(CASES, key=lambda n: not n.startswith("co")) if cases is None
+             else list(cases))
     for n in names:
         if n not in CASES:
             raise ParameterError(f"dpm.validation.run: case={n!r} is unknown; allowed: "
