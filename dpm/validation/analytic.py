@@ -171,9 +171,9 @@ def flip(quick: bool, models: Sequence[str]) -> list[Row]:
             compare("flip", "velocity_verlet", "flip times / that time",
                     list(zip(flips[:k], ref_flips[:k], strict=True)), 1e-2, src,
                     scale=ref_period),
-            compare("flip", "velocity_verlet", "angular momentum |L - L0| / |L0|",
+            compare("flip", "velocity_verlet", "largest drift of L, norm(L - L0) / norm(L0)",
                     [(max(lerr), 0.0)], 1e-9, "conservation", scale=1.0),
-            compare("flip", "velocity_verlet", "kinetic energy E / E0 - 1",
+            compare("flip", "velocity_verlet", "largest drift of E, E / E0 - 1",
                     [(max(abs(x) for x in energy), 0.0)], 1e-4, "conservation", scale=1.0)]
 
 
