@@ -9,12 +9,14 @@ run resumed from a checkpoint overwrites the rows after the checkpoint's frames.
 without an orbiting boundary get nothing. The same rows are kept in memory
 (:func:`recorded`).
 
-(HDF5 in single-writer/multiple-reader mode, as dpm writes its output, creates the group
-at the first frame; HDF5 1.10-1.14 refused new objects in that mode, HDF5 2.0 allows them.)
+The group is created at the first frame, with the file already in HDF5's
+single-writer/multiple-reader mode (as dpm writes its output): HDF5 2.0 allows that; where
+an older HDF5 refuses, the hook warns once and keeps the rows in memory only.
 """
 
 from __future__ import annotations
 
+import warnings
 import weakref
 from typing import Any
 
@@ -26,6 +28,20 @@ from .motions import Orbit
 GROUP = "contrib_example/orbit"
 
 _RECORDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_WARNED: weakref.WeakSet = weakref.WeakSet()
+
+
+def _layout(f: Any, n: int, ks: list[int]) -> None:
+    """The group and its empty extendable datasets."""
+    g = f.require_group(GROUP)
+    g.create_dataset("time", shape=(0,), maxshape=(None,), dtype="f8", chunks=(256,))
+    for name in ("origin", "velocity"):
+        g.create_dataset(name, shape=(0, n, 3), maxshape=(None, n, 3), dtype="f8",
+                         chunks=(256, n, 3))
+    g.attrs["boundaries"] = np.asarray(ks, np.int64)
+    g["time"].attrs["unit"] = "s"
+    g["origin"].attrs["unit"] = "m"
+    g["velocity"].attrs["unit"] = "m/s"
 
 
 def orbiting(sim: Any) -> list[int]:
@@ -55,17 +71,17 @@ def on_output(sim: Any, frame: int) -> None:
     f = getattr(sim.last_output, "file", None)
     if f is None:  # no file on this process (an MPI rank other than 0)
         return
-    g = f.require_group(GROUP)
-    n = len(ks)
-    if "time" not in g:
-        g.create_dataset("time", shape=(0,), maxshape=(None,), dtype="f8", chunks=(256,))
-        for name in ("origin", "velocity"):
-            g.create_dataset(name, shape=(0, n, 3), maxshape=(None, n, 3), dtype="f8",
-                             chunks=(256, n, 3))
-        g.attrs["boundaries"] = np.asarray(ks, np.int64)
-        g["time"].attrs["unit"] = "s"
-        g["origin"].attrs["unit"] = "m"
-        g["velocity"].attrs["unit"] = "m/s"
+    if f.get(GROUP) is None:
+        try:
+            _layout(f, len(ks), ks)
+        except (ValueError, RuntimeError, OSError) as exc:  # HDF5 < 2.0 in SWMR mode
+            if sim not in _WARNED:
+                _WARNED.add(sim)
+                warnings.warn(f"dpm-contrib-example: cannot add {GROUP} to {f.filename} "
+                              f"({exc}); the rows are kept in memory only (recorded(sim))",
+                              stacklevel=2)
+            return
+    g = f[GROUP]
     for name, value in (("origin", origin), ("velocity", velocity), ("time", sim.time)):
         ds = g[name]
         ds.resize(frame + 1, axis=0)
