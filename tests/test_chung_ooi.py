@@ -143,3 +143,17 @@ def test_whole_suite_is_within_tolerance():
     assert not failed, validation.table(failed)
     assert {r.test.split()[0] for r in rows} >= {f"CO{k}" for k in range(1, 9)}
     assert {"sandwich", "rolling"} <= {r.test.split()[0] for r in rows}
+
+
+def test_no_slip_reference_limits():
+    """Without a tangential spring (G* -> 0) the slip is unchanged; the contact point at
+    R - d/2 instead of R changes the answer by about d_max/R."""
+    from dpm.validation.references import effective_shear, mindlin_no_slip
+
+    _, rho, young, nu = chung_ooi.STEEL
+    m, r = sphere_mass(1e-5, rho), 1e-5
+    es = effective_young(young, nu)
+    assert mindlin_no_slip(m, r, es, 1e-12 * es, 5.0) == pytest.approx(1.0, abs=1e-9)
+    at_r = mindlin_no_slip(m, r, es, effective_shear(young, nu), 5.0, arm=0.0)
+    half = mindlin_no_slip(m, r, es, effective_shear(young, nu), 5.0)
+    assert 0.9 < half < at_r < 1.0

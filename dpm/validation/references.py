@@ -92,3 +92,45 @@ def rigid_sliding(un: float, ut: float, e: float, mu: float, m1: float, r1: floa
                    dv1=-s * jt / m1, dsurf1=-s * jt * r1 * r1 / i1,
                    dv2=s * jt * inv2,
                    dsurf2=0.0 if math.isinf(i2) else s * jt * r2 * r2 / i2)
+
+
+def effective_shear(e1: float, nu1: float, e2: float = math.inf, nu2: float = 0.0) -> float:
+    """G* = 1 / (2 (2 - nu1)(1 + nu1)/E1 + 2 (2 - nu2)(1 + nu2)/E2) (Mindlin's; a rigid
+    plane by default)."""
+    inv = 2.0 * (2.0 - nu1) * (1.0 + nu1) / e1
+    if not math.isinf(e2):
+        inv += 2.0 * (2.0 - nu2) * (1.0 + nu2) / e2
+    return 1.0 / inv
+
+
+def mindlin_no_slip(mass: float, radius: float, estar: float, gstar: float,
+                    speed: float, arm: float = 0.5) -> float:
+    """Slip after / slip before of a sphere hitting a rigid plane with a Hertz normal force
+    and a Mindlin tangential spring that never slides (mu -> infinity), no damping.
+
+    The ODE (scipy, DOP853, rtol 1e-11): m d'' = -4/3 E* sqrt(R) d^(3/2); the spring
+    s' = v_t - w a collects the contact point's slip, F_t = -8 G* sqrt(R d) s acts on the
+    sphere at the contact point, a = R - ``arm`` d from the centre (dpm puts it at
+    R - d/2): m v_t' = F_t, I w' = -a F_t, I = 2/5 m R^2. The answer does not depend on the
+    initial slip (the problem is linear in it).
+    """
+    from scipy.integrate import solve_ivp
+
+    inertia = 0.4 * mass * radius**2
+    kn = 4.0 / 3.0 * estar * math.sqrt(radius)
+
+    def rhs(_, y):
+        d, dd, s, vt, w = y
+        dp = max(d, 0.0)
+        a = radius - arm * dp
+        ft = -8.0 * gstar * math.sqrt(radius * dp) * s
+        return [dd, -kn * dp**1.5 / mass, vt - w * a, ft / mass, -a * ft / inertia]
+
+    def end(_, y):
+        return y[0]
+
+    end.terminal, end.direction = True, -1
+    t = hertz_impact(mass, radius, estar, speed).duration
+    sol = solve_ivp(rhs, (0.0, 2.0 * t), [1e-30 * radius, speed, 0.0, 1.0, 0.0], events=end,
+                    rtol=1e-11, atol=1e-20, max_step=t / 2000, method="DOP853")
+    return float(sol.y[3][-1] - sol.y[4][-1] * radius)
