@@ -106,3 +106,6 @@ def dpm_register_backends(register: Register) -> None:
     from .parallel.backend import MpiBackend
 
     register("mpi", MpiBackend)
+    from .backends.cuda import CudaBackend  # (numba.cuda is imported only when it is used)
+
+    register("cuda", CudaBackend)
