@@ -41,8 +41,8 @@ SOURCE = "dpm-contrib-example:contrib"
 
 def _install(target: Path) -> str:
     """Install the package into ``target``; return how."""
-    cmd = [sys.executable, "-m", "pip", "install", "--no-deps", "--quiet",
-           "--disable-pip-version-check", "--target", str(target), str(PKG)]
+    cmd = [sys.executable, "-m", "pip", "install", "--no-deps", "--quiet", "--retries", "1",
+           "--timeout", "10", "--disable-pip-version-check", "--target", str(target), str(PKG)]
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     if r.returncode == 0:
         return "pip"
