@@ -19,6 +19,7 @@ and the table carries their weight; the TOML scene file gives the same run bit f
 from __future__ import annotations
 
 import importlib
+import importlib.metadata as md
 import math
 import os
 import shutil
@@ -46,7 +47,12 @@ def _install(target: Path) -> str:
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     if r.returncode == 0:
         return "pip"
-    # no build backend reachable: the files and metadata pip would have written
+    _lay_out(target)
+    return "by hand (pip: " + (r.stderr.strip().splitlines() or ["?"])[-1] + ")"
+
+
+def _lay_out(target: Path) -> None:
+    """The files and metadata pip would write (where no build backend is reachable)."""
     shutil.copytree(PKG / "dpm_contrib_example", target / "dpm_contrib_example",
                     ignore=shutil.ignore_patterns("__pycache__"))
     meta = tomllib.loads((PKG / "pyproject.toml").read_text())["project"]
@@ -57,7 +63,6 @@ def _install(target: Path) -> str:
     eps = meta["entry-points"]["dpm"]
     (info / "entry_points.txt").write_text(
         "[dpm]\n" + "".join(f"{k} = {v}\n" for k, v in eps.items()))
-    return "by hand (pip: " + (r.stderr.strip().splitlines() or ["?"])[-1] + ")"
 
 
 @pytest.fixture(scope="module")
@@ -99,6 +104,28 @@ def test_discovered_after_installation_absent_before(installed):
     for _, name in NAMES:
         assert name in out.stdout
     assert "dpm-contrib-example" in out.stdout
+
+
+def test_by_hand_layout_is_what_pip_writes(installed, tmp_path):
+    """The fallback layout has pip's package files and entry points."""
+    if installed["how"] != "pip":
+        pytest.skip(f"installed {installed['how']}")
+    _lay_out(tmp_path)
+    target = installed["target"]
+
+    def files(root):
+        return sorted(str(p.relative_to(root)) for p in (root / "dpm_contrib_example").rglob(
+            "*.py"))
+
+    assert files(tmp_path) == files(target)
+    for name in files(target):
+        assert (tmp_path / name).read_bytes() == (target / name).read_bytes()
+    mine = list(md.distributions(path=[str(tmp_path)]))
+    pips = list(md.distributions(path=[str(target)]))
+    assert [d.metadata["Name"] for d in mine] == [d.metadata["Name"] for d in pips]
+    assert [d.version for d in mine] == [d.version for d in pips]
+    assert ({(e.group, e.name, e.value) for e in mine[0].entry_points}
+            == {(e.group, e.name, e.value) for e in pips[0].entry_points})
 
 
 def test_blocked_plugin_is_absent(installed, monkeypatch):
