@@ -36,6 +36,7 @@ from .motion import (
     Tumbling,
 )
 from .plugins import register, registry
+from .reciprocating import Reciprocating
 from .regions import BoxRegion, CylinderRegion, Region
 from .scene_tools import lattice
 from .shapes import Shape
@@ -48,5 +49,5 @@ __all__ = [
     "ImpactModel", "Inlet", "Integrator", "lattice", "load", "Material", "Motion",
     "Oscillation", "Outlet", "ParameterError", "Region", "register", "registry", "restart",
     "Rotation", "SceneError", "Shape", "Simulation", "Translation", "TriangularOscillation",
-    "Tumbling", "UnknownNameError", "UnstableRunError", "__version__",
+    "Tumbling", "UnknownNameError", "UnstableRunError", "__version__", "Reciprocating",
 ]

@@ -25,6 +25,7 @@ from .integrators import (
     Taylor,
     VelocityVerlet,
 )
+from .reciprocating import Reciprocating
 from .shapes import BUILTIN_SHAPES
 
 
@@ -82,6 +83,7 @@ def dpm_register_motions(register: Register) -> None:
     register("oscillation", motion.Oscillation)
     register("triangular_oscillation", motion.TriangularOscillation)
     register("tumbling", motion.Tumbling)
+    register("reciprocating", Reciprocating)
 
 
 @hookimpl

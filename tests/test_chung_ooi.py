@@ -102,7 +102,7 @@ def test_a_wrong_friction_is_caught(monkeypatch):
         return real(model, e, 0.8 * mu, *args)
 
     monkeypatch.setattr(chung_ooi, "params", wrong)
-    rows = chung_ooi.test4(True, ["hertz_mindlin"])
+    rows = chung_ooi.co4(True, ["hertz_mindlin"])
     sliding = [r for r in rows if "sliding" in r.quantity]
     assert sliding and not any(r.passed for r in sliding)
     assert all(r.passed for r in rows if r.quantity.startswith("restitution"))

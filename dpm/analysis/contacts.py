@@ -49,7 +49,7 @@ def coordination_distribution(source: Any, tol: float = 1e-6, frame: int = -1
 
 def force_distribution(source: Any, bins: int = 30, subtract_gravity: bool = True
                        ) -> dict[str, np.ndarray]:
-    """Distribution of the body force magnitudes |F| / <|F|> of a live Simulation (or of a
+    """Distribution of the body force magnitudes ``|F| / <|F|>`` of a live Simulation (or of a
     namespace with ``force``, ``mass``): the net contact force on each body (the force sum
     less m g with ``subtract_gravity``; the gravity of the simulation). This is not the
     distribution of single contact forces (which dpm does not hand out per pair): it is a

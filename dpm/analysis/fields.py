@@ -171,7 +171,7 @@ def coarse_grain(source: Any, width: float, cell: Any, lower: Any, upper: Any,
 
     phi(r) = sum_i V_i W(r - r_i), rho(r) = sum_i m_i W(r - r_i), momentum density
     p(r) = sum_i m_i v_i W(r - r_i), velocity = p / rho, with
-    W(r) = (2 pi w^2)^(-3/2) exp(-|r|^2 / (2 w^2)) cut at ``cutoff`` w and renormalised to
+    W(r) = (2 pi w^2)^(-3/2) exp(-``|r|^2`` / (2 w^2)) cut at ``cutoff`` w and renormalised to
     integral 1 (Goldhirsch, I. 2010, "Stress, stress asymmetry and couple stress: from
     discrete particles to continuous fields", Granular Matter 12, 239-252; Weinhart, T.,
     Thornton, A. R., Luding, S., Bokhove, O. 2012, "From discrete particles to continuum

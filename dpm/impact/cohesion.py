@@ -26,16 +26,16 @@ class LinearCohesionAdhesion(AdhesionPart):
 class LinearCohesion(HertzMindlin):
     """Hertz-Mindlin plus cohesion k_c times the contact area (cohesion energy density).
 
-    EDEM "Linear Cohesion"; LIGGGHTS ``cohesion sjkr`` (a simplified JKR).
+    EDEM "Linear Cohesion"; LIGGGHTS ``cohesion sjkr`` (a simplified JKR)::
 
         F_n = max(0, F_HM) - k_c pi R* d        (pi R* d: Hertz contact area pi a^2)
 
     F_HM is :class:`HertzMindlin`'s normal force (restitution sets its damping as there);
     k_c [J/m3] is the cohesion energy density. Unloaded, a pair rests at the overlap
-        d_eq = (3 pi k_c / (4 E*))^2 R*,
-    and a pair colliding slower than a critical speed stays stuck. The attraction acts only
-    while the bodies overlap (the engine sees no contact at a separation), so it is a short-
-    range cohesion; a JKR neck that survives past d = 0 would need detection at a distance.
+    d_eq = (3 pi k_c / (4 E*))^2 R*, and a pair colliding slower than a critical speed
+    stays stuck. The attraction acts only while the bodies overlap (the engine sees no
+    contact at a separation), so it is a short-range cohesion; a JKR neck that survives
+    past d = 0 would need detection at a distance.
     Tangential: Mindlin spring with Coulomb limit mu max(0, F_HM).
     Parts: :class:`~dpm.impact.hertz_mindlin.HertzTsujiNormal` x
     :class:`~dpm.impact.hertz_mindlin.MindlinTsujiTangential` x

@@ -63,7 +63,7 @@ class BrilliantovNormal(HertzNormalBase):
 
 
 class MindlinTangential(TangentialPart):
-    """Mindlin's no-slip spring with a viscous dashpot and a Coulomb limit (Mindlin 1949):
+    """Mindlin's no-slip spring with a viscous dashpot and a Coulomb limit (Mindlin 1949)::
 
         k_t = 8 G* sqrt(R* d),  c_t = 2 zeta_t sqrt(m* k_t),  |F_t| <= mu F_n
 

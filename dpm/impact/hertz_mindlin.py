@@ -49,7 +49,7 @@ class HertzTsujiNormal(HertzNormalBase):
 
 class MindlinTsujiTangential(TangentialPart):
     """Mindlin's no-slip spring with Tsuji's dashpot and a Coulomb limit (Mindlin 1949;
-    Tsuji et al. 1992; LIGGGHTS ``tangential history``):
+    Tsuji et al. 1992; LIGGGHTS ``tangential history``)::
 
         k_t = 8 G* sqrt(R* d),  c_t = 2 sqrt(5/6) beta sqrt(k_t m*),  |F_t| <= mu F_n
 
@@ -69,7 +69,7 @@ class MindlinTsujiTangential(TangentialPart):
 
 
 class HertzMindlin(ImpactModel):
-    """Hertz normal force, Mindlin no-slip tangential spring with history, Coulomb limit.
+    """Hertz normal force, Mindlin no-slip tangential spring with history, Coulomb limit::
 
         F_n = max(0, 4/3 E* sqrt(R* d) d + 2 sqrt(5/6) beta sqrt(2 E* sqrt(R* d) m*) d')
             = max(0, k d^(3/2) + sqrt(5) beta sqrt(k m*) d^(1/4) d'),  k = 4/3 E* sqrt(R*)

@@ -46,12 +46,13 @@ class HookeNormal(NormalPart):
 class Hooke(LinearSpringDashpot):
     """Linear spring-dashpot with k_n = 4/3 E* R* from the elastic constants (Hooke).
 
-    DPM thesis Samiei 2012 §2.6.3, eq. 2.36 (ERRATA: R*, not sqrt(R*)).
+    DPM thesis Samiei 2012 §2.6.3, eq. 2.36 (ERRATA: R*, not sqrt(R*)). Tangential as
+    :class:`LinearSpringDashpot`::
 
-    Normal:      F_n = max(0, k_n d + c_n d'),  k_n = 4/3 E* R*,  c_n = 2 zeta sqrt(m* k_n)
-    Tangential:  as :class:`LinearSpringDashpot`: spring k_t = kappa k_n with history,
-                 dashpot c_t = 2 zeta_t sqrt(m* k_n), Coulomb limit mu F_n
-                 (kappa = 0: the thesis' viscous F_t = min(c_t |v_t|, mu F_n)).
+        Normal:      F_n = max(0, k_n d + c_n d'),  k_n = 4/3 E* R*,  c_n = 2 zeta sqrt(m* k_n)
+        Tangential:  spring k_t = kappa k_n with history,
+                     dashpot c_t = 2 zeta_t sqrt(m* k_n), Coulomb limit mu F_n
+                     (kappa = 0: the thesis' viscous F_t = min(c_t |v_t|, mu F_n)).
 
     k_n uses each contact's own R*, so small pairs are softer. zeta is solved so that the
     restitution with the attractive force cut off is the one set (as the linear model);

@@ -17,10 +17,12 @@ optimize = lazy_module("scipy.optimize")
 def cutoff_contact_time(zeta: float, omega0: float) -> float:
     """Duration of a linear spring-dashpot contact whose attractive force is cut off.
 
-    The force k d + c d' reaches zero (and the particles separate) at
+    The force k d + c d' reaches zero (and the particles separate) at::
+
       t_c = (pi - 2 atan(beta/omega)) / omega          zeta < 1, omega = omega0 sqrt(1-zeta^2)
       t_c = 2 / beta                                   zeta = 1
       t_c = 2 atanh(omega'/beta) / omega'              zeta > 1, omega' = omega0 sqrt(zeta^2-1)
+
     with beta = zeta omega0 (Schwager & Poschel 2007, PRE 75, 051304).
     """
     beta = zeta * omega0
@@ -97,14 +99,14 @@ class LinearNormal(NormalPart):
 
 
 class LinearTangential(TangentialPart):
-    """Tangential spring-dashpot of the linear family (Cundall & Strack 1979):
+    """Tangential spring-dashpot of the linear family (Cundall & Strack 1979)::
 
         F_t = -(k_t s + c_t v_t), |F_t| <= mu F_n,  k_t = kappa k_n,  c_t = 2 zeta_t sqrt(m* k_n)
 
     k_n is the normal part's stiffness; the spring s has history (projected on the tangent
     plane) and carries mu F_n alone while sliding. Slots (mu, kappa, zeta_t); zeta_t
     defaults to the linear damping ratio of the restitution. ``tangential_stiffness_ratio=0``
-    gives the thesis' viscous F_t = min(c_t |v_t|, mu F_n) (eq. 2.28).
+    gives the thesis' viscous ``F_t = min(c_t |v_t|, mu F_n)`` (eq. 2.28).
     """
 
     name = "linear_spring_coulomb"
@@ -120,12 +122,14 @@ class LinearTangential(TangentialPart):
 
 
 class LinearSpringDashpot(ImpactModel):
-    """Linear spring-dashpot (Cundall & Strack 1979; DPM thesis Samiei 2012, §2.6.1).
+    """Linear spring-dashpot (Cundall & Strack 1979; DPM thesis Samiei 2012, §2.6.1)::
 
-    Normal:      F_n = max(0, k_n d + c_n d'),  c_n = 2 zeta sqrt(m* k_n)
-    Tangential:  spring k_t = kappa k_n with history, dashpot c_t = 2 zeta_t sqrt(m* k_n),
-                 Coulomb limit mu F_n. ``tangential_stiffness_ratio=0`` gives the thesis'
-                 purely viscous F_t = min(c_t |v_t|, mu F_n) (eq. 2.28).
+        Normal:      F_n = max(0, k_n d + c_n d'),  c_n = 2 zeta sqrt(m* k_n)
+        Tangential:  spring k_t = kappa k_n with history, dashpot c_t = 2 zeta_t sqrt(m* k_n),
+                     Coulomb limit mu F_n.
+
+    ``tangential_stiffness_ratio=0`` gives the thesis' purely viscous
+    ``F_t = min(c_t |v_t|, mu F_n)`` (eq. 2.28).
 
     The damping ratio zeta is solved so that the restitution *with the attractive force cut
     off* is the one set (the thesis' eq. 2.21 ignores the cut-off and gives e = 0.55 for a

@@ -53,7 +53,7 @@ class MawNormal(NormalPart):
 
 
 class MawTangential(TangentialPart):
-    """Tangential spring-dashpot of DPM thesis eqs. 2.33-2.34:
+    """Tangential spring-dashpot of DPM thesis eqs. 2.33-2.34::
 
         F_t = -(k_t s + c_t v_t), |F_t| <= mu F_n,  k_t = kappa k_n,  c_t = 2 zeta_t sqrt(m* k_t)
         zeta_t = -ln e_t / sqrt(ln^2 e_t + pi^2)
@@ -87,10 +87,13 @@ class MawLinearSpring(ImpactModel):
     Di Maio 2004.
 
     The normal spring stores at maximum compression the energy of a Hertz contact hit at the
-    characteristic impact speed v, so it has the Hertz largest overlap at that speed:
+    characteristic impact speed v, so it has the Hertz largest overlap at that speed::
+
         k_n = 16/15 sqrt(R*) E* (15 m* v^2 / (16 sqrt(R*) E*))^(1/5)
         F_n = max(0, k_n d + c_n d'),  c_n = 2 zeta sqrt(m* k_n)
-    Tangential spring-dashpot with slip history and Coulomb limit:
+
+    Tangential spring-dashpot with slip history and Coulomb limit::
+
         F_t = -(k_t s + c_t v_t) limited to mu F_n,   k_t = kappa k_n,
         c_t = 2 zeta_t sqrt(m* k_t),  zeta_t = -ln e_t / sqrt(ln^2 e_t + pi^2)  (eq. 2.34)
 

@@ -138,7 +138,7 @@ class RollingPart(Part):
 
 
 class ConstantTorque(RollingPart):
-    """T_r = -mu_r F_n R* w_rel/|w_rel| (DPM thesis eq. 2.53 with the unit vector; Zhou et
+    """``T_r = -mu_r F_n R* w_rel/|w_rel|`` (DPM thesis eq. 2.53 with the unit vector; Zhou et
     al. 1999). A rolling sphere decelerates at 5/7 mu_r g."""
 
     name = "constant_torque"
@@ -246,7 +246,7 @@ def pack_tables(contacts: dict, materials: list, context_of) -> tuple:
     """The scene's laws (one per distinct composition), material-pair tables and history
     width: (laws, pair_model, pair_params, history width). ``context_of(ia, ib)`` gives the
     :class:`PairContext` of a pair. The table is 8 wide (``kernels.config.pair_row``), or 16
-where a law needs more (``pair_row16``)."""
+    where a law needs more (``pair_row16``)."""
     nm = len(materials)
     laws: list = []
     keys: list = []

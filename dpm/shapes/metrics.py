@@ -28,7 +28,7 @@ MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
 
 
 def union_distance(points: np.ndarray, centres: np.ndarray, radii: np.ndarray) -> np.ndarray:
-    """Signed distance of points to the union of spheres: min_i(|p - c_i| - r_i)."""
+    """Signed distance of points to the union of spheres: ``min_i(|p - c_i| - r_i)``."""
     p = np.asarray(points, float)
     out = np.empty(len(p))
     step = max(1, 2_000_000 // max(len(radii), 1))
@@ -86,7 +86,7 @@ def shape_report(shape: Shape, samples: int = 4000, volume_samples: int = 100_00
     points), ``volume_ratio`` = union / ideal and ``volume_ratio_err`` (one standard
     error), ``r_eq`` (radius of the sphere of equal volume), surface deviations in metres
     -- ``dev_ideal_max``/``dev_ideal_rms`` from ``samples`` points on the ideal surface to
-    the cluster surface (|min_i |p - c_i| - r_i|), ``dev_cluster_max``/``dev_cluster_rms``
+    the cluster surface (``|min_i |p - c_i| - r_i|``), ``dev_cluster_max``/``dev_cluster_rms``
     from ``samples`` points on the cluster surface to the ideal surface, ``dev_max`` and
     ``dev_rms`` over both sets --, ``r_min``/``r_max`` (element radii, m), ``tolerance``
     (the generator's surface tolerance, m), ``inscribed_radius`` (m) and ``seconds``

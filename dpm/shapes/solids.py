@@ -195,7 +195,7 @@ class Parallelepiped(_ConvexPolyhedron):
 
     Edge vectors (crystallographic convention): e1 = a x; e2 = b (cos gamma, sin gamma, 0);
     e3 = c (cos beta, (cos alpha - cos beta cos gamma) / sin gamma, ...), centred on its
-    centroid. V = |det E|; second moment S = V/12 E E^T; I = tr(S) 1 - S. With all angles
+    centroid. ``V = |det E|``; second moment S = V/12 E E^T; I = tr(S) 1 - S. With all angles
     90 degrees and c = b this is the thesis' special case (a square prism).
     The default (gamma = 70 degrees) is an oblique prism whose principal axes are not the
     frame's axes.
