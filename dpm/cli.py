@@ -1,5 +1,5 @@
-"""Command line: ``dpm run``, ``dpm plugins``, ``dpm xdmf``, ``dpm analyse``,
-``dpm clear-cache``."""
+"""Command line: ``dpm run``, ``dpm plugins``, ``dpm xdmf``, ``dpm analyse``, ``dpm shapes``,
+``dpm validate``, ``dpm new-plugin``, ``dpm clear-cache``."""
 
 from __future__ import annotations
 
