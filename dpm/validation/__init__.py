@@ -23,7 +23,7 @@ class Row:
     quantity: str      #: what is compared (and over how many impacts)
     value: float       #: dpm's value (the worst point of a sweep)
     reference: float   #: the reference at that point
-    error: float       #: |value - reference| / scale (scale: |reference| unless stated)
+    error: float       #: abs(value - reference) / scale (scale: abs(reference) unless stated)
     tolerance: float   #: the largest error that passes
     passed: bool
     source: str = ""   #: where the reference comes from
@@ -33,7 +33,7 @@ def compare(test: str, model: str, quantity: str, pairs: Iterable[tuple[float, f
             tolerance: float, source: str, scale: float | None = None) -> Row:
     """One row from (value, reference) points: the worst of them.
 
-    The error is |value - reference| / scale with ``scale`` (default |reference| of each
+    The error is abs(value - reference) / scale with ``scale`` (default abs(reference) of each
     point, relative error); a sweep's row shows its largest error.
     """
     worst = None

@@ -2,7 +2,7 @@
 
 * Hertz (1882) head-on impact of elastic spheres (or a sphere and a rigid plane), with
   m* = m1 m2/(m1 + m2), R* = R1 R2/(R1 + R2), 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 and
-  the approach speed v:
+  the approach speed v::
 
       F = 4/3 E* sqrt(R*) d^(3/2)
       d_max = (15 m* v^2 / (16 E* sqrt(R*)))^(2/5)
@@ -16,7 +16,7 @@
 * Rigid-body impact with Coulomb friction that slides for the whole contact (Maw, Barber
   & Fawcett 1976, their large-angle limit; Walton 1993; Thornton et al.): the normal
   impulse J_n = (1 + e) u_n / A with A = 1/m1 + 1/m2, the tangential impulse mu J_n against
-  the contact point's slip u_t, as long as |u_t| >= mu J_n B with
+  the contact point's slip u_t, as long as abs(u_t) >= mu J_n B with
   B = 1/m1 + 1/m2 + R1^2/I1 + R2^2/I2 (a plane: A = 1/m, B = 7/(2m) for a solid sphere).
   Sphere i then changes its tangential velocity by -+ mu J_n / m_i and the surface speed of
   its contact point by -+ mu J_n R_i^2 / I_i.
@@ -65,7 +65,7 @@ class Sliding:
 
     normal_impulse: float    #: J_n [N s]
     tangential_impulse: float  #: mu J_n [N s] (its sign: against the slip)
-    margin: float            #: |u_t| / (mu J_n B): >= 1 slides throughout
+    margin: float            #: abs(u_t) / (mu J_n B): >= 1 slides throughout
     dv1: float               #: change of sphere 1's tangential velocity [m/s]
     dsurf1: float            #: change of sphere 1's contact-point surface speed [m/s]
     dv2: float               #: same for sphere 2 (0 for a plane)
