@@ -132,6 +132,9 @@ def test_unknown_case_or_model_refused(capsys):
         validation.run(["co9"])
     assert main(["validate", "--case", "co9"]) == 2
     assert "case='co9'" in capsys.readouterr().err
+    with pytest.raises(ParameterError, match=r"no case of \['flip'\] applies to "
+                                             r"models=\['hertz_mindlin'\]"):
+        validation.run(["flip"], models=["hertz_mindlin"])
 
 
 @pytest.mark.slow

@@ -111,12 +111,16 @@ def run(cases: Sequence[str] | None = None, quick: bool = False,
     rows: list[Row] = []
     for n in names:
         case = CASES[n]
-        use = [m for m in case.models if models is None or m in models]
-        if not use and case.models:
-            continue
+        use = list(case.models) if models is None else [m for m in case.models
+                                                         if m in models]
+        if models is not None and not use:
+            continue  # a case of other models (or of none: the flip) is left out
         if progress:
             progress(f"{n}: {case.title}")
         rows.extend(case.run(quick, use))
+    if not rows:
+        raise ParameterError(f"dpm.validation.run: no case of {names} applies to "
+                             f"models={list(models or ())}")
     return rows
 
 
