@@ -84,6 +84,15 @@ def dpm_after_step(sim: Simulation) -> None:
 
 
 @hookspec
+def dpm_output_layout(sim: Simulation, file: Any) -> None:
+    """A new output file is being laid out: create the plugin's own groups and (empty,
+    extendable) datasets in ``file`` (the open ``h5py.File``) here, then fill them in
+    :func:`dpm_on_output`. Called once per file, before the file goes to HDF5's
+    single-writer/multiple-reader mode, after which HDF5 before 2.0 refuses new
+    datasets."""
+
+
+@hookspec
 def dpm_on_output(sim: Simulation, frame: int, path: Any) -> None:
     """Called after each output frame is written and flushed."""
 

@@ -218,6 +218,11 @@ def _layout(f: Any, sim: Simulation) -> None:
                       chunks=(max(1, min(64, (1 << 20) // (24 * nv))), nv, 3))
     group("removed", REMOVED_FIELDS, 1024)
     _thermo_layout(f)
+    from ..plugins import call_hook, registry
+
+    # plugins' own datasets, while new ones may still be created (before SWMR mode)
+    call_hook(getattr(sim, "_registry", None) or registry(), "dpm_output_layout", sim=sim,
+              file=f)
     for g in f.values():
         for name, ds in g.items():
             if name in UNITS:

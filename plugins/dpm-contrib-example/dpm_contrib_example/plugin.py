@@ -26,6 +26,12 @@ def dpm_register_motions(register):
 
 
 @dpm.hookimpl
+def dpm_output_layout(sim, file):
+    """Lay out the orbit datasets in a new output file (:mod:`.recorder`)."""
+    recorder.layout(sim, file)
+
+
+@dpm.hookimpl
 def dpm_on_output(sim, frame, path):
     """Record the orbiting boundaries' frames into the output (:mod:`.recorder`)."""
     recorder.on_output(sim, frame)

@@ -9,9 +9,11 @@ run resumed from a checkpoint overwrites the rows after the checkpoint's frames.
 without an orbiting boundary get nothing. The same rows are kept in memory
 (:func:`recorded`).
 
-The group is created at the first frame, with the file already in HDF5's
-single-writer/multiple-reader mode (as dpm writes its output): HDF5 2.0 allows that; where
-an older HDF5 refuses, the hook warns once and keeps the rows in memory only.
+The group is laid out when dpm lays out a new output file (hook ``dpm_output_layout``),
+before the file goes to HDF5's single-writer/multiple-reader mode. A file laid out without
+it (written before the plugin was installed, then resumed) gets the group at the first
+frame, which HDF5 2.0 allows in that mode; where an older HDF5 refuses, the hook warns once
+and keeps the rows in memory only.
 """
 
 from __future__ import annotations
@@ -42,6 +44,13 @@ def _layout(f: Any, n: int, ks: list[int]) -> None:
     g["time"].attrs["unit"] = "s"
     g["origin"].attrs["unit"] = "m"
     g["velocity"].attrs["unit"] = "m/s"
+
+
+def layout(sim: Any, f: Any) -> None:
+    """The hook ``dpm_output_layout``: the group of a scene with orbiting boundaries."""
+    ks = orbiting(sim)
+    if ks and f.get(GROUP) is None:
+        _layout(f, len(ks), ks)
 
 
 def orbiting(sim: Any) -> list[int]:
