@@ -32,7 +32,8 @@ Figures, as the thesis defines them:
 - screening efficiency of deck i: the fraction of the undersize that reached level i
   (particles that fit its holes) which passed its sieve,
 - throughput of each level's outlet and of each deck (particles per second),
-- particles remaining in the machine; mass balance fed = exited + remaining.
+- particles remaining in the machine; mass balance fed = exited + remaining + escaped
+  (thrown out of the scene: see docs/scenes.md on the sieve model's energy jumps).
 
     python examples/screening_machine.py --quick           # 0.6 s, the CI check
     python examples/screening_machine.py --until 20        # the thesis' steady state
@@ -271,6 +272,8 @@ class Machine:
         fed = (sum(len(x) for x in self.feed.ids) if self.feed is not None
                else len(self.size_class))
         out.update({"case": asdict(case), "fed": int(fed), "present": len(sim.bodies),
+                    # thrown out of the scene (the escape guard removed them)
+                    "escaped": int(sim.escaped.count),
                     "time": sim.time, "steps": sim.step_count - steps0, "wall_s": wall,
                     "particle_steps_per_s": psteps / max(wall, 1e-9), "series": self.series})
         return out
@@ -334,7 +337,8 @@ def main(argv: list[str] | None = None) -> None:
     out = run_case(case, progress=not args.quick)
     print(f"simulated {out['time']:.2f} s in {out['wall_s']:.1f} s "
           f"({out['particle_steps_per_s']:.3g} particle-steps/s); fed {out['fed']}, "
-          f"exited {out['exited']}, in the machine {out['present']}")
+          f"exited {out['exited']}, in the machine {out['present']}, thrown out of the "
+          f"scene {out['escaped']}")
     for lv in range(len(out["sorted"]), 0, -1):
         print(f"  level {lv}: sorted {out['sorted'][lv - 1]:5d}  gangue "
               f"{out['gangue'][lv - 1]:5d}")

@@ -113,7 +113,7 @@ def test_machine_quick_run_balances():
     m = sm.Machine(case)
     out = m.run()
     assert out["fed"] > 50
-    assert out["fed"] == out["exited"] + out["present"]
+    assert out["fed"] == out["exited"] + out["present"] + out["escaped"]
     assert out["oversize_through"] == 0 and out["unseen"] == 0
     # every particle present sits on a level at or above its own
     lev = m.level_of(m.local(m.sim.bodies.position, m.sim.time))
