@@ -143,6 +143,12 @@ class CudaBackend(CpuBackend):
         self._snapshot: tuple | None = None
         self._lists_on_device = False
         self._grown: dict[str, int] = {}
+        #: read the rebuild decision on the host and launch the rebuild kernels only when
+        #: it asks for them (the simulator, where every launched thread costs a Python
+        #: thread; on a GPU the rebuild kernels return at once instead: no host sync)
+        self.host_gate = self.simulator
+        #: threads per block (the simulator: fewer idle threads for small scenes)
+        self.block = 32 if self.simulator else 128
         #: launches, transfers and times of the last call
         self.timing: dict[str, float] = {}
 
@@ -352,7 +358,7 @@ class CudaBackend(CpuBackend):
         k, dev, sim = self.kernels(), self._dev, self.sim
         b, e = sim.bodies, sim.elements
         nb, ne = len(b), len(e)
-        blk = 128
+        blk = self.block
 
         def grid(n: int) -> int:
             return max(1, (n + blk - 1) // blk)
@@ -467,19 +473,24 @@ class CudaBackend(CpuBackend):
             (_Launch(k.k_step_end, 1, 1), (st, float(sim.max_overlap), dt, dev["w_load"],
                                   dev["w_frame"])),
         ]
-        self._args = (pre, decide + rebuild + forces)
+        self._args = (pre, decide, rebuild, forces)
         nf = dev["w_frame"].shape[0] * dev["w_frame"].shape[1]
         self._frame_kernel = cfg(k.k_set_frame, nf)
 
     def _step(self, s: int, frames: Any, finish_only: bool = False) -> None:
-        pre, rest = self._args
+        pre, decide, rebuild, forces = self._args
         if not finish_only:
             if frames is not None:
                 self._frame_kernel(self._dev["state"], self._dev["w_frame"], frames,
                                    min(s, frames.shape[0] - 1))
             for kern, args in pre:
                 kern(*args)
-        for kern, args in rest:
+        for kern, args in decide:
+            kern(*args)
+        if not self.host_gate or self._read_state()[7] != 0.0:
+            for kern, args in rebuild:
+                kern(*args)
+        for kern, args in forces:
             kern(*args)
 
     def _read_state(self) -> np.ndarray:
@@ -548,6 +559,60 @@ class CudaBackend(CpuBackend):
         self.timing = {"steps": s, "launch_steps": launched, "uploaded": float(uploaded),
                        "steps_s": t_steps, "call_s": time.perf_counter() - t0}
         return self._result(s)
+
+    # ------------------------------------------------------------------ checks
+    def compile_ptx(self, cc: tuple[int, int] = (9, 0)) -> dict[str, int]:
+        """Compile every kernel of the attached scene for a GPU of compute capability
+        ``cc`` without running it (no GPU needed: numba-cuda's NVVM only; not on the
+        simulator); returns the PTX size per kernel. The argument types are those of the
+        launches :meth:`advance` makes."""
+        from numba import typeof
+
+        from ..kernels import cuda_step as cs
+
+        if self.simulator:
+            raise ParameterError("CudaBackend.compile_ptx(): not on the CUDA simulator")
+
+        class _Host:  # numpy stand-ins for the device arrays: the same numba types
+            @staticmethod
+            def to_device(a: np.ndarray) -> np.ndarray:
+                return np.array(a)
+
+            @staticmethod
+            def device_array(shape: Any, dtype: Any = float) -> np.ndarray:
+                return np.zeros(shape, dtype)
+
+        cuda, self.cuda = self.cuda, _Host()
+        try:
+            self._upload()
+            self._launch_plan(1e-6)
+            pre, decide, rebuild, forces = self._args
+            plan = [*pre, *decide, *rebuild, *forces]
+            plan.append((self._frame_kernel, (self._dev["state"], self._dev["w_frame"],
+                                              np.zeros((1, *self._dev["w_frame"].shape)), 0)))
+            speed = self.kernels().k_speed
+            plan.append((_Launch(speed, 1, 1), (1, self._dev["b_vel"], np.zeros(2))))
+        finally:
+            self.cuda = cuda
+            self._dev = None
+        sizes: dict[str, int] = {}
+        from numba.cuda import dispatcher
+
+        class _Device:  # (device functions ask the driver for it; without one: ``cc``)
+            compute_capability = cc
+
+        current = dispatcher.get_current_device
+        dispatcher.get_current_device = lambda: _Device
+        try:
+            for launch, args in plan:
+                fn = launch.kernel.py_func
+                sig = tuple(typeof(a) for a in args)
+                ptx, _ = cuda.compile_ptx(fn, sig, cc=cc)
+                sizes[fn.__name__] = max(sizes.get(fn.__name__, 0), len(ptx))
+        finally:
+            dispatcher.get_current_device = current
+        assert set(sizes) == set(cs.KERNELS), set(cs.KERNELS) - set(sizes)
+        return sizes
 
     # ------------------------------------------------------------------ reductions
     def max_speed(self) -> tuple[int, float]:

@@ -289,10 +289,13 @@ def body_pre_force(b, dt, spin_only, periodic, update_elements, n_owned, period,
 
 def element_contacts(i, dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radius,
                      e_mat, e_pos, e_worst, e_count, nl_start, nl_j, nl_hist, nl_active, nl_f,
-                     wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, pair_model,
-                     pair_params, period, w_kind, w_par, w_owner, w_mat, w_ids, f_cur):
+                     walls, pair_model, pair_params, period, bnd):
     """Pass a of ``step.contact_pass`` for element i (its pairs and boundary entries, each
-    into its force row)."""
+    into its force row). ``walls`` and ``bnd``: tuples of the boundary list's and the
+    boundary table's arrays (a call with more than 30 arguments is compiled by CPython as
+    a call with ``*args``, which numba-cuda cannot inline)."""
+    wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag = walls
+    w_kind, w_par, w_owner, w_mat, w_ids, f_cur = bnd
     xi = e_pos[i, 0]
     yi = e_pos[i, 1]
     zi = e_pos[i, 2]
@@ -437,11 +440,6 @@ def k_pre_force(state, n, dt, spin_only, periodic, update_elements, n_owned, per
 def k_decide(state, skin, frame, frame_ref, extent):
     if cuda.grid(1) == 0 and state[S_STATUS] == STATUS_OK:
         decide(state, skin, frame, frame_ref, extent)
-
-
-def k_force_rebuild(state):
-    if cuda.grid(1) == 0 and state[S_STATUS] == STATUS_OK:
-        state[S_REBUILD] = 1.0
 
 
 def k_zero(state, gate, a, n):
@@ -648,8 +646,8 @@ def k_contacts(state, n, dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner,
         return
     element_contacts(i, dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, e_radius,
                      e_mat, e_pos, e_worst, e_count, nl_start, nl_j, nl_hist, nl_active, nl_f,
-                     wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, pair_model, pair_params,
-                     period, w_kind, w_par, w_owner, w_mat, w_ids, f_cur)
+                     (wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag), pair_model,
+                     pair_params, period, (w_kind, w_par, w_owner, w_mat, w_ids, f_cur))
     w = e_worst[i]
     if w > 0.0:
         cuda.atomic.max(state, S_STEP_WORST, w)
