@@ -297,7 +297,7 @@ def build(case: Case, output: str | None = None) -> tuple[dpm.Simulation, dict]:
     # outlet: past and below the end of the last bar
     e = geo.end
     outlet = sim.add_outlet(dpm.BoxRegion((e[0] + 0.5 * dmin, -1, e[2] - 1.0),
-                                          (e[0] + 1.0, 1, e[2] - 0.5 * dmax)), every=every)
+                                          (e[0] + 1.0, 1, e[2] - 0.5 * dmax)), every=0.05)
     if output:
         sim.output(output, every=10 * case.cycle, overwrite=True)
     info = dict(geo=geo, width=width, mass_flow=mass_flow, bed_ids=np.asarray(bed_ids),
