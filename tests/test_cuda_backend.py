@@ -167,6 +167,22 @@ def implicit_refused() -> str:
     return "ran"
 
 
+def case_ptx() -> dict:
+    """Every kernel of the small scene compiled to PTX for sm_90 (no GPU: NVVM only)."""
+    try:
+        from numba.cuda.cudadrv.nvvm import NVVM
+
+        NVVM()
+    except Exception as exc:  # noqa: BLE001 (no NVVM library: nothing to compile with)
+        return {"skip": f"no NVVM ({type(exc).__name__}: {' '.join(str(exc).split())[:200]})"}
+    from dpm.backends.cpu import CpuBackend
+    from dpm.backends.cuda import CudaBackend
+
+    sim = _pipes_small(CpuBackend(threads=1))
+    sim.run(steps=1, progress=False)
+    return {"sizes": CudaBackend.compile_check(sim, (9, 0))}
+
+
 def case_no_device() -> dict:
     """``Simulation(device="cuda")`` without the simulator: on a machine without a GPU,
     a clear error; ``import dpm`` alone never imports numba.cuda."""
@@ -216,6 +232,20 @@ def test_contract_scene_start_matches_cpu(name):
     _check(res)
 
 
+@pytest.mark.slow
+def test_kernels_compile_for_sm90():
+    """numba-cuda compiles every kernel, with the scene's laws, geometry and integrator
+    called from it, for a real GPU (PTX for compute capability 9.0; needs NVVM, from
+    ``numba-cuda[cu12]``, not a GPU)."""
+    res = _run_case("ptx", sim=False)
+    if "skip" in res:
+        pytest.skip(res["skip"])
+    from dpm.kernels import cuda_step
+
+    assert set(res["sizes"]) == set(cuda_step.KERNELS)
+    assert all(v > 1000 for v in res["sizes"].values())
+
+
 def test_no_device_is_a_clear_error():
     res = _run_case("no_device", sim=False)
     assert not res["imported_numba_cuda"]
@@ -230,6 +260,8 @@ if __name__ == "__main__":
     case = sys.argv[1]
     if case == "pipes":
         result = case_pipes()
+    elif case == "ptx":
+        result = case_ptx()
     elif case.startswith("contract:"):
         _, scene, n = case.split(":")
         result = case_contract(scene, int(n))

@@ -129,12 +129,18 @@ class CudaBackend(CpuBackend):
     """
 
     name = "cuda"
+    #: seconds of steps the run loop aims at per call (the host state travels once per
+    #: call: longer calls than the CPU's 0.1 s)
+    call_aim = 0.5
 
     def __init__(self, threads: int | None = None, sync_lists: bool = True,
                  poll: int = 64) -> None:
         if not (isinstance(poll, int) and poll >= 1):
             raise ParameterError(f"CudaBackend(): poll={poll!r} must be an integer >= 1")
-        self.cuda = cuda_module()
+        self._setup(cuda_module(), threads, sync_lists, poll)
+
+    def _setup(self, cuda: Any, threads: int | None, sync_lists: bool, poll: int) -> None:
+        self.cuda = cuda
         super().__init__(threads=threads, force_pass="two_pass")
         self.sync_lists = bool(sync_lists)
         self.poll = poll
@@ -561,6 +567,20 @@ class CudaBackend(CpuBackend):
         return self._result(s)
 
     # ------------------------------------------------------------------ checks
+    @classmethod
+    def compile_check(cls, sim: Any, cc: tuple[int, int] = (9, 0)) -> dict[str, int]:
+        """Compile every kernel of ``sim``'s scene (run at least once on the CPU, so that
+        it is planned) for compute capability ``cc``, without a GPU (:meth:`compile_ptx`);
+        ``sim`` keeps its backend."""
+        from numba import cuda
+
+        be = cls.__new__(cls)
+        be._setup(cuda, None, True, 64)
+        be.simulator = False
+        be.host_gate, be.block = False, 128
+        be.attach(sim)
+        return be.compile_ptx(cc)
+
     def compile_ptx(self, cc: tuple[int, int] = (9, 0)) -> dict[str, int]:
         """Compile every kernel of the attached scene for a GPU of compute capability
         ``cc`` without running it (no GPU needed: numba-cuda's NVVM only; not on the
