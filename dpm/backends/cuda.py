@@ -153,6 +153,9 @@ class CudaBackend(CpuBackend):
         #: it asks for them (the simulator, where every launched thread costs a Python
         #: thread; on a GPU the rebuild kernels return at once instead: no host sync)
         self.host_gate = self.simulator
+        #: the simulator: compile the device functions for the CPU (``DPM_CUDASIM_COMPILED=1``)
+        #: instead of running them as Python (the default: no compile, for small scenes)
+        self.sim_compiled = os.environ.get("DPM_CUDASIM_COMPILED") == "1"
         #: threads per block (the simulator: fewer idle threads for small scenes)
         self.block = 32 if self.simulator else 128
         #: launches, transfers and times of the last call
@@ -226,11 +229,12 @@ class CudaBackend(CpuBackend):
     # ------------------------------------------------------------------ transfers
     def kernels(self) -> Any:
         """The device kernels of the scene's step module (compiled at first launch)."""
-        key = (self.module.__name__, self.simulator)
+        python = self.simulator and not self.sim_compiled
+        key = (self.module.__name__, self.simulator, python)
         if key not in _KERNELS:
             from ..kernels.cuda_step import make_kernels
 
-            _KERNELS[key] = make_kernels(self.module, self.simulator)
+            _KERNELS[key] = make_kernels(self.module, self.simulator, python)
         return _KERNELS[key]
 
     def _upload(self) -> None:

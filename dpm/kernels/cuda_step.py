@@ -43,6 +43,7 @@ from types import FunctionType, SimpleNamespace
 
 import numpy as np
 from numba import cuda, njit
+from numba.core.dispatcher import Dispatcher
 
 from .boundary_geometry import in_range
 from .boundary_search import boundary_motion_since_rebuild, to_local
@@ -715,17 +716,62 @@ SCENE_NAMES = ("closest", "pair_contact", "boundary_contacts", "place_elements",
                "pre_force_body", "pre_force_sphere", "post_force_body", "add_row")
 
 
-def make_kernels(step_module, simulator: bool) -> SimpleNamespace:
+def _pure(fn, memo: dict):
+    """The pure-Python form of a jitted function and of every jitted function it reaches
+    (their module globals mirrored with the dispatchers replaced), for the simulator."""
+    if not isinstance(fn, Dispatcher):
+        return fn
+    key = id(fn)
+    if key in memo:
+        return memo[key]
+    py = fn.py_func
+    gkey = id(py.__globals__)
+    if gkey not in memo:
+        memo[gkey] = dict(py.__globals__)
+        mirror = memo[gkey]
+        for k, v in list(mirror.items()):
+            if isinstance(v, Dispatcher):
+                mirror[k] = _LazyPure(v, memo)
+    out = FunctionType(py.__code__, memo[gkey], py.__name__, py.__defaults__, py.__closure__)
+    memo[key] = out
+    return out
+
+
+class _LazyPure:
+    """A dispatcher's pure-Python form, made at its first call."""
+
+    __slots__ = ("disp", "memo", "fn")
+
+    def __init__(self, disp, memo: dict) -> None:
+        self.disp, self.memo, self.fn = disp, memo, None
+
+    def __call__(self, *args):
+        if self.fn is None:
+            self.fn = _pure(self.disp, self.memo)
+        return self.fn(*args)
+
+
+def make_kernels(step_module, simulator: bool, python: bool = False) -> SimpleNamespace:
     """The kernels of this file bound to a scene's step module (its ``closest``, contact
-    laws and integrator parts); on the simulator, entered through :func:`_raw`."""
+    laws and integrator parts); on the simulator, entered through :func:`_raw`. With
+    ``python`` (the simulator only) the device functions and everything they call run as
+    pure Python (the same source, nothing compiled: for small scenes, where compiling them
+    for the CPU costs more than running them interpreted)."""
     ns = dict(globals())
+    memo: dict = {}
     for name in SCENE_NAMES:
         ns[name] = getattr(step_module, name)
+        if python:
+            ns[name] = _pure(ns[name], memo)
+    for name in ("in_range", "to_local", "minimum_image", "boundary_motion_since_rebuild"):
+        if python:
+            ns[name] = _pure(ns[name], memo)
     opts = dict(JIT, inline="always")
     opts.pop("cache", None)
     for name in DEVICE_FUNCTIONS:
         fn = globals()[name]
-        ns[name] = njit(**opts)(FunctionType(fn.__code__, ns, name, fn.__defaults__))
+        fn = FunctionType(fn.__code__, ns, name, fn.__defaults__)
+        ns[name] = fn if python else njit(**opts)(fn)
     out = {}
     for name in KERNELS:
         fn = globals()[name]
