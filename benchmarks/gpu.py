@@ -51,11 +51,13 @@ def _example(name: str):
 
 
 def _backend(device: str):
-    if device == "cuda":
+    if device.startswith("cuda"):
         from dpm.backends.cuda import CudaBackend
 
-        # (box_settle has no flow events, checkpoints or hooks: only the bodies travel)
-        return CudaBackend(sync_lists=False)
+        # (box_settle has no flow events, checkpoints or hooks: only the bodies travel);
+        # "cuda_host_gate": the rebuild decision read on the host every step
+        return CudaBackend(sync_lists=False,
+                           host_gate=True if device == "cuda_host_gate" else None)
     from dpm.backends.cpu import CpuBackend
 
     return CpuBackend(threads=os.cpu_count() if os.cpu_count() else 1)
@@ -83,8 +85,9 @@ def box_settle(lat, steps: int, device: str) -> dict:
            "time_to_first_steps_s": first,
            "mean_z_m": float(sim.bodies.position[:, 2].mean()),
            "neighbour_rebuilds": sim.rebuild_count}
-    if device == "cuda":
+    if device.startswith("cuda"):
         out["last_call"] = dict(sim.backend.timing)
+        out["host_gate"] = sim.backend.host_gate
     else:
         out["threads"] = sim.threads
     return out
@@ -170,13 +173,19 @@ def main(argv: list[str] | None = None) -> dict:
             res["box_settle"][name] = "skipped: budget"
             continue
         row = {"lattice": list(lat)}
-        for device in ("cuda", "cpu"):
+        # at the smallest size also with the rebuild decision read on the host (launch
+        # overhead against one small read per step)
+        devices = ("cuda", "cpu") + (("cuda_host_gate",) if name == next(iter(sizes)) else ())
+        for device in devices:
             row[device] = box_settle(lat, steps, device)
             print(name, device, json.dumps(row[device]), flush=True)
         g, c = row["cuda"], row["cpu"]
         row["speedup"] = g["particle_steps_per_s"] / c["particle_steps_per_s"]
         row["mean_z_rel_diff"] = g["mean_z_m"] / c["mean_z_m"] - 1.0
         row["mean_z_within_0_5_percent"] = abs(row["mean_z_rel_diff"]) <= 0.005
+        if "cuda_host_gate" in row:
+            row["speedup_host_gate"] = (row["cuda_host_gate"]["particle_steps_per_s"]
+                                        / c["particle_steps_per_s"])
         res["box_settle"][name] = row
     if sim_mode or a.no_mill:
         res["mill"] = "skipped" + (" on the simulator" if sim_mode else "")

@@ -126,6 +126,10 @@ class CudaBackend(CpuBackend):
     poll : int
         Steps between reads of the device status (one 128-byte copy each); a status
         stops the steps launched after it from doing anything.
+    host_gate : bool, optional
+        Read the rebuild decision on the host every step and launch the rebuild kernels
+        only when it asks for them (one 128-byte read per step instead of ~27 empty
+        launches; default: on the simulator only). Same results either way.
     """
 
     name = "cuda"
@@ -134,10 +138,12 @@ class CudaBackend(CpuBackend):
     call_aim = 0.5
 
     def __init__(self, threads: int | None = None, sync_lists: bool = True,
-                 poll: int = 64) -> None:
+                 poll: int = 64, host_gate: bool | None = None) -> None:
         if not (isinstance(poll, int) and poll >= 1):
             raise ParameterError(f"CudaBackend(): poll={poll!r} must be an integer >= 1")
         self._setup(cuda_module(), threads, sync_lists, poll)
+        if host_gate is not None:
+            self.host_gate = bool(host_gate)
 
     def _setup(self, cuda: Any, threads: int | None, sync_lists: bool, poll: int) -> None:
         self.cuda = cuda
@@ -177,6 +183,10 @@ class CudaBackend(CpuBackend):
                                  f"{sim.integrator.name} integrator is not supported on "
                                  "the GPU (its Newton iterations run on the host); choose "
                                  "an explicit one")
+        if not self.sync_lists and (sim.inlets or sim.outlets):
+            raise ParameterError("CudaBackend(sync_lists=False): the scene has inlets or "
+                                 "outlets, whose events change the contact lists on the "
+                                 "host; use sync_lists=True (the default)")
         self._pull_lists()
         super().attach(sim)
         self._dev = None
