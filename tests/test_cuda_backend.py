@@ -185,6 +185,24 @@ def case_ptx() -> dict:
     return {"sizes": CudaBackend.compile_check(sim, (9, 0))}
 
 
+def case_restart() -> dict:
+    """8 + 8 steps on the CUDA backend, and the same from a checkpoint written after 8."""
+    import tempfile
+
+    import dpm
+
+    a = _pipes_small("cuda")
+    a.run(steps=8, progress=False)
+    with tempfile.TemporaryDirectory() as d:
+        path = a.checkpoint(Path(d) / "c.h5")
+        a.run(steps=8, progress=False)
+        b = dpm.restart(path)
+        b.run(steps=8, progress=False)
+        b.close()
+    a.close()
+    return {"backend": type(b.backend).__name__, "compare": _compare(_state(a), _state(b))}
+
+
 def case_no_device() -> dict:
     """``Simulation(device="cuda")`` without the simulator: on a machine without a GPU,
     a clear error; ``import dpm`` alone never imports numba.cuda."""
@@ -248,6 +266,17 @@ def test_kernels_compile_for_sm90():
     assert all(v > 1000 for v in res["sizes"].values())
 
 
+@pytest.mark.slow
+def test_checkpoint_restart_continues_bit_for_bit():
+    """A checkpoint of a CUDA run (the host state is whole between calls) restarts on the
+    CUDA backend and continues with the bits of the uninterrupted run."""
+    res = _run_case("restart")
+    assert res["backend"] == "CudaBackend"
+    cmp = res["compare"]
+    assert cmp.pop("same_ids")
+    assert all(bits for _, bits in cmp.values()), cmp
+
+
 def test_no_device_is_a_clear_error():
     res = _run_case("no_device", sim=False)
     assert not res["imported_numba_cuda"]
@@ -262,6 +291,8 @@ if __name__ == "__main__":
     case = sys.argv[1]
     if case == "pipes":
         result = case_pipes()
+    elif case == "restart":
+        result = case_restart()
     elif case == "ptx":
         result = case_ptx()
     elif case.startswith("contract:"):

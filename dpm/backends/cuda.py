@@ -168,8 +168,11 @@ class CudaBackend(CpuBackend):
         self.timing: dict[str, float] = {}
 
     def __getstate__(self) -> dict[str, Any]:
+        if self._lists_on_device:  # (a checkpoint holds the whole state)
+            self._pull_lists()
         state = super().__getstate__()
-        state.update(cuda=None, _dev=None, _snapshot=None, _lists_on_device=False)
+        state.update(cuda=None, _dev=None, _snapshot=None, _lists_on_device=False,
+                     _args=None, _frame_kernel=None)
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
