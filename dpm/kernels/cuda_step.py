@@ -39,7 +39,6 @@ wrapped, so each kernel is entered through a wrapper that unwraps its arrays
 """
 # ruff: noqa: F811
 import math
-from types import FunctionType, SimpleNamespace
 
 import numpy as np
 from numba import cuda, njit
@@ -94,6 +93,17 @@ STATUS_WALL_OVERFLOW = 4
 H1 = 73856093
 H2 = 19349663
 H3 = 83492791
+
+
+#: the type of a Python function (the kernel layer imports only numpy, numba and math)
+FunctionType = type(lambda: None)
+
+
+class Kernels:
+    """The kernels of a scene, by name (attributes)."""
+
+    def __init__(self, **kernels) -> None:
+        self.__dict__.update(kernels)
 
 
 def _raw(a):
@@ -751,7 +761,7 @@ class _LazyPure:
         return self.fn(*args)
 
 
-def make_kernels(step_module, simulator: bool, python: bool = False) -> SimpleNamespace:
+def make_kernels(step_module, simulator: bool, python: bool = False) -> Kernels:
     """The kernels of this file bound to a scene's step module (its ``closest``, contact
     laws and integrator parts); on the simulator, entered through :func:`_raw`. With
     ``python`` (the simulator only) the device functions and everything they call run as
@@ -784,4 +794,4 @@ def make_kernels(step_module, simulator: bool, python: bool = False) -> SimpleNa
             out[name] = cuda.jit(ns[name])
         else:
             out[name] = cuda.jit(body)
-    return SimpleNamespace(**out)
+    return Kernels(**out)
