@@ -98,7 +98,7 @@ def _pipes_small(backend):
                       angular_velocities=np.cross([0, 0, 1], v) / rb, radius=rb)
     sim.add_particles("sphere", material=glass,
                       positions=[[0.0, 0.0, -0.01361], [0.00282, 0.0, -0.01325]],
-                      velocities=[[0.3, 0, -0.05], [-0.3, 0, 0.0]], radius=1.4e-3)
+                      velocities=[[0.3, 0, -0.05], [-0.3, 0, -0.6]], radius=1.4e-3)
     sim.add_particles("cube", material=glass, positions=[[0.045, 0, -rp + 1.6e-3]],
                       velocities=[[1.0, 0.0, 0.0]], angular_velocities=[[0.0, 30.0, 0.0]],
                       orientations=[[0.96, 0.1, 0.2, 0.15]], a=2e-3)
@@ -203,6 +203,36 @@ def case_restart() -> dict:
     return {"backend": type(b.backend).__name__, "compare": _compare(_state(a), _state(b))}
 
 
+def case_overflow() -> dict:
+    """The small scene with the device lists cut to their entries at each upload, so that
+    a rebuild that finds more entries fills them: the device grows them and finishes the
+    step (``finish_step``), as the CPU does."""
+    from dpm.backends.cpu import CpuBackend
+    from dpm.backends.cuda import CudaBackend
+
+    upload = CudaBackend._upload
+
+    def tight(self) -> None:
+        upload(self)
+        dev = self._dev
+        for pre, fields in (("nl_", ("key", "hist", "active", "force", "t_pair")),
+                            ("wl_", ("key", "hist", "active", "force", "tag"))):
+            count = int(dev[pre + "start"].copy_to_host()[-1])
+            for f in fields:
+                dev[pre + f] = dev[pre + f][:count]
+        self._scratch_lists(dev, dev["nl_key"].shape[0], dev["wl_key"].shape[0],
+                            len(self.sim.elements))
+
+    CudaBackend._upload = tight
+    states, grown = [], {}
+    for backend in (CpuBackend(threads=1, force_pass="two_pass"), "cuda"):
+        sim = _pipes_small(backend)
+        sim.run(steps=STEPS, progress=False)
+        states.append(_state(sim))
+        grown = getattr(sim.backend, "_grown", grown)
+    return {"grown": grown, "compare": _compare(*states)}
+
+
 def case_no_device() -> dict:
     """``Simulation(device="cuda")`` without the simulator: on a machine without a GPU,
     a clear error; ``import dpm`` alone never imports numba.cuda."""
@@ -277,6 +307,13 @@ def test_checkpoint_restart_continues_bit_for_bit():
     assert all(bits for _, bits in cmp.values()), cmp
 
 
+@pytest.mark.slow
+def test_full_device_lists_grow_and_the_step_is_finished():
+    res = _run_case("overflow")
+    assert set(res["grown"]) == {"nl_", "wl_"}, res["grown"]
+    _check(res)
+
+
 def test_no_device_is_a_clear_error():
     res = _run_case("no_device", sim=False)
     assert not res["imported_numba_cuda"]
@@ -291,6 +328,8 @@ if __name__ == "__main__":
     case = sys.argv[1]
     if case == "pipes":
         result = case_pipes()
+    elif case == "overflow":
+        result = case_overflow()
     elif case == "restart":
         result = case_restart()
     elif case == "ptx":

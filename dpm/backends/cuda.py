@@ -330,8 +330,8 @@ class CudaBackend(CpuBackend):
             for lst, pre, fields in ((c, "nl_", ("key", "hist", "active", "force", "t_pair")),
                                      (wc, "wl_", ("key", "hist", "active", "force", "tag"))):
                 cap = dev[pre + "key"].shape[0]
-                if lst.capacity != cap:
-                    lst.grow(self._grown[pre])
+                if lst.capacity < cap:  # (the device list grew: the host's follows)
+                    lst.grow(self._grown.get(pre, cap))
                 dev[pre + "start"].copy_to_host(lst.start)
                 if pre == "nl_":
                     dev["nl_t_start"].copy_to_host(lst.t_start)
@@ -366,10 +366,8 @@ class CudaBackend(CpuBackend):
         for f in fields:
             old = dev[pre + f]
             new = cuda.device_array((cap,) + old.shape[1:], old.dtype)
-            if count:
+            if count:  # (force rows past the list are cleared when a rebuild fills them)
                 new[:count].copy_to_device(old[:count])
-            if f == "force":
-                new[count:] = 0.0 if count < cap else new[count:]
             dev[pre + f] = new
         n = len(self.sim.elements)
         self._scratch_lists(dev, dev["nl_key"].shape[0], dev["wl_key"].shape[0], n)
