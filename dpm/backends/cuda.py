@@ -413,7 +413,7 @@ class CudaBackend(CpuBackend):
             nblocks = max(1, (n + nsb - 1) // nsb)
             return [(_Launch(k.k_scan_block, nblocks, nsb),
                      (st, gate, dev[vals], n, dev[out], dev["sums"])),
-                    (_Launch(k.k_scan_sums, 1, 1),
+                    (_Launch(k.k_scan_sums, 1, 1 if self.simulator else nsb),
                      (st, gate, dev["sums"], nblocks, dev[out], n, slot, capacity, status)),
                     (cfg(k.k_scan_add, n), (st, gate, dev[out], n, dev["sums"]))]
 

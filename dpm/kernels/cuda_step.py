@@ -518,22 +518,42 @@ def k_scan_block(state, gate, vals, n, out, sums):
 
 
 def k_scan_sums(state, gate, sums, nblocks, out, n, slot, capacity, status):
-    """Exclusive scan of the block totals (one thread); out[n] = the total; a total above
-    ``capacity`` (> 0) sets ``status`` and the entries needed."""
-    if cuda.grid(1) != 0 or state[S_STATUS] != STATUS_OK or (
-            gate != 0 and state[S_REBUILD] == 0.0):
+    """Exclusive scan of the block totals by one block of up to SCAN_BLOCK threads (chunks
+    of blockDim items, a carry between them); out[n] = the total; a total above
+    ``capacity`` (>= 0) sets ``status`` and the entries needed."""
+    if state[S_STATUS] != STATUS_OK or (gate != 0 and state[S_REBUILD] == 0.0):
         return
-    acc = 0
-    for b in range(nblocks):
-        v = sums[b]
-        sums[b] = acc
-        acc += v
-    out[n] = acc
-    if slot >= 0:
-        state[slot] = acc
-    if capacity >= 0 and acc > capacity:
-        state[S_STATUS] = status
-        state[S_NEEDED] = acc
+    buf = cuda.shared.array(SCAN_BLOCK, np.int64)
+    t = cuda.threadIdx.x
+    width = cuda.blockDim.x
+    carry = 0
+    for c0 in range(0, nblocks, width):
+        i = c0 + t
+        v = 0
+        if i < nblocks:
+            v = sums[i]
+        buf[t] = v
+        cuda.syncthreads()
+        off = 1
+        while off < width:
+            x = 0
+            if t >= off:
+                x = buf[t - off]
+            cuda.syncthreads()
+            buf[t] += x
+            cuda.syncthreads()
+            off *= 2
+        if i < nblocks:
+            sums[i] = carry + buf[t] - v
+        carry += buf[width - 1]
+        cuda.syncthreads()
+    if t == 0:
+        out[n] = carry
+        if slot >= 0:
+            state[slot] = carry
+        if capacity >= 0 and carry > capacity:
+            state[S_STATUS] = status
+            state[S_NEEDED] = carry
 
 
 def k_scan_add(state, gate, out, n, sums):
