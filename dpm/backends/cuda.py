@@ -225,19 +225,20 @@ class CudaBackend(CpuBackend):
 
     def _host_unchanged(self) -> bool:
         """Whether the host state is what the last call left (a script or hook may
-        have changed it between calls)."""
+        have changed the bodies between calls, a boundary switch the search grids)."""
         if self._dev is None or self._snapshot is None:
             return False
         b, w = self.sim.bodies, self.sim.walls
         now = (b.position, b.velocity, b.angular_velocity, b.orientation, b.mass, w.kind,
-               w.par)
+               w.par, w.grid_int)
         return all(a.shape == c.shape and np.array_equal(a, c)
                    for a, c in zip(now, self._snapshot, strict=True))
 
     def _take_snapshot(self) -> None:
         b, w = self.sim.bodies, self.sim.walls
         self._snapshot = tuple(a.copy() for a in (
-            b.position, b.velocity, b.angular_velocity, b.orientation, b.mass, w.kind, w.par))
+            b.position, b.velocity, b.angular_velocity, b.orientation, b.mass, w.kind, w.par,
+            w.grid_int))
 
     # ------------------------------------------------------------------ transfers
     def kernels(self) -> Any:
