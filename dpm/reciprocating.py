@@ -24,16 +24,12 @@ class Reciprocating(Motion):
 
     With T_s = A / v the time of one stroke, the period is T = 2 T_s + 2 t_p. Over one
     period, tau = (t + ``phase``) mod T, the displacement along the unit stroke direction
-    e = stroke / A is
+    e = stroke / A is, with its rate::
 
-    ====================================  ====================  ==========
-    tau in                                s(tau)                ds/dt
-    ====================================  ====================  ==========
-    [0, T_s)                              v tau                 v
-    [T_s, T_s + t_p)                      A                     0
-    [T_s + t_p, 2 T_s + t_p)              A - v (tau - T_s - t_p)  -v
-    [2 T_s + t_p, T)                      0                     0
-    ====================================  ====================  ==========
+        tau in [0, T_s):               s = v tau,                    ds/dt = v
+        tau in [T_s, T_s + t_p):       s = A,                        ds/dt = 0
+        tau in [T_s + t_p, 2 T_s + t_p): s = A - v (tau - T_s - t_p),  ds/dt = -v
+        tau in [2 T_s + t_p, T):       s = 0,                        ds/dt = 0
 
     and the frame moves by o(t) = s e, do/dt = (ds/dt) e, R = I, omega = 0. ``phase`` [s]
     shifts the cycle (a bar started mid-stroke); at t + phase = 0 the bar is at its rest
