@@ -27,8 +27,9 @@ particle leaving level i is *sorted* (s_i) if level i is its own size's level an
 
 Figures, as the thesis defines them:
 
-- machine efficiency c = 100/M sum_i s_i / (s_i + g_i)  (eq. 4.33; a level with no
-  exits yet counts as 0),
+- machine efficiency c = 100/M sum_i s_i / (s_i + g_i)  (eq. 4.33), with c_1 = 1 as
+  eq. 4.34 sets it (no gangue can reach the lowest level); another level with no exits
+  yet counts as 0 (:func:`machine_efficiency`),
 - screening efficiency of deck i: the fraction of the undersize that reached level i
   (particles that fit its holes) which passed its sieve,
 - throughput of each level's outlet and of each deck (particles per second),
@@ -301,7 +302,7 @@ def figures(exits: tuple[np.ndarray, np.ndarray], reached: np.ndarray,
             g[lv - 1] += 1
         else:  # below its own level: a sieve let an oversize particle through
             oversize += 1
-    ci = np.where(s + g > 0, s / np.maximum(s + g, 1), 0.0)
+    ci = level_efficiencies(s, g)
     # screening efficiency of the floor of level l (l >= 2): of the particles that reached
     # level l and fit its floor's holes, the fraction that reached level l - 1
     screen = []
@@ -311,10 +312,26 @@ def figures(exits: tuple[np.ndarray, np.ndarray], reached: np.ndarray,
         passed = reached[fits, lv - 2].sum()
         screen.append(float(passed / came) if came else float("nan"))
     return {"sorted": s.tolist(), "gangue": g.tolist(), "level_efficiency": ci.tolist(),
-            "machine_efficiency": float(100.0 * ci.mean()), "unseen": int(unseen),
+            "machine_efficiency": machine_efficiency(s, g), "unseen": int(unseen),
             "oversize_through": int(oversize),
             "exited": int(len(cls)), "deck_screening": screen,
             "exits_per_level": (s + g).tolist()}
+
+
+def level_efficiencies(s: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """c_i = s_i / (s_i + g_i) of each level (eq. 4.33); c_1 = 1 (eq. 4.34: nothing
+    smaller than the lowest level's own size exists, so g_1 = 0); a higher level with no
+    exits yet: 0."""
+    s = np.asarray(s, float)
+    g = np.asarray(g, float)
+    ci = np.where(s + g > 0, s / np.maximum(s + g, 1), 0.0)
+    ci[0] = 1.0
+    return ci
+
+
+def machine_efficiency(s: np.ndarray, g: np.ndarray) -> float:
+    """c = 100/M sum_i c_i [%] (eqs. 4.33-4.34)."""
+    return float(100.0 * level_efficiencies(s, g).mean())
 
 
 def run_case(case: Case, progress: bool = False) -> dict:

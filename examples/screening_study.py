@@ -41,7 +41,7 @@ from dataclasses import asdict, replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from screening_machine import Case, run_case  # noqa: E402
+from screening_machine import Case, machine_efficiency, run_case  # noqa: E402
 
 #: sweep name -> (parameter shown on the x axis, [(x, case changes)], thesis points)
 SWEEPS: dict[str, tuple[str, list[tuple[float, dict]], dict[float, float]]] = {
@@ -107,8 +107,9 @@ def draw(results: dict, path: str) -> None:
         ax.set_title(name)
     for ax in list(axes.flat)[len(names):]:
         ax.axis("off")
-    axes.flat[0].legend(fontsize=7)
-    fig.tight_layout()
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8)
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
     fig.savefig(path, dpi=90)
 
 
@@ -121,7 +122,18 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--quick", action="store_true",
                    help="two cases of 0.3 s with 150 particles (a check that it runs)")
     p.add_argument("--output", default="screening_study", help="output stem (.json, .png)")
+    p.add_argument("--replot", action="store_true",
+                   help="recompute the figures from the output's JSON and redraw (no runs)")
     args = p.parse_args(argv)
+    if args.replot:
+        path = Path(args.output).with_suffix(".json")
+        out = json.loads(path.read_text())
+        for rs in out["results"].values():
+            for r in rs:
+                r["machine_efficiency"] = machine_efficiency(r["sorted"], r["gangue"])
+        path.write_text(json.dumps(out, indent=1))
+        draw(out["results"], str(Path(args.output).with_suffix(".png")))
+        return
     base = Case(until=args.until, particles=args.particles)
     todo = cases(args.sweeps, base)
     if args.quick:

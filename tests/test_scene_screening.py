@@ -39,8 +39,9 @@ def test_efficiency_from_constructed_exits():
     f = sm.figures((cls, lev), reached, own, 5)
     assert f["sorted"] == [4, 0, 2, 0, 3]
     assert f["gangue"] == [0, 0, 2, 0, 1]
-    # c = 100/M sum s_i/(s_i+g_i), levels without exits count 0
+    # c = 100/M sum s_i/(s_i+g_i), c_1 = 1 (eq. 4.34), other levels without exits 0
     assert f["machine_efficiency"] == pytest.approx(100 / 5 * (1 + 0.5 + 0.75))
+    assert sm.machine_efficiency([0, 0, 0, 0, 1], [0, 0, 0, 0, 1]) == pytest.approx(30.0)
     # level 5's floor: classes 0..3 fit it; 14 of them came, 7 reached level 4
     assert f["deck_screening"][3] == pytest.approx(7 / 14)
     assert f["oversize_through"] == 0 and f["unseen"] == 0
