@@ -62,11 +62,15 @@ scene before the first step: they take fixed planes and boxes only (the bars are
 ``wall`` slabs), a fixed body count (no inlets or outlets) and no periodic faces
 (``--integrator numerov`` shows their error).
 
-    python examples/grate.py --quick                     # CI: one short run (~1 min)
-    python examples/grate.py                             # the documented set (fast bars)
+    python examples/grate.py --quick      # CI: one short run (~13 s once compiled)
+    python examples/grate.py              # the four documented sets (~40 min, 2 cores)
+    python examples/grate.py --set width  # one of them: validation, mass_flow, width, speed
     python examples/grate.py --grate backward --material wood --mass-flow 40 --fast-bars
 
-Writes ``grate_<set>.json`` and ``grate_<set>.png`` into ``--output`` (default .).
+Writes ``grate_<set>.json``, ``grate_<set>.png`` (RTDs, bed height, Lacey index) and
+``grate_<set>_bed.png`` (the beds at the end, side view) into ``--output`` (default .);
+``--replot`` redraws the pictures from the JSON files there. docs/scenes.md gives the
+results and the comparison with the thesis.
 """
 
 from __future__ import annotations
