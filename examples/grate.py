@@ -560,6 +560,24 @@ SETS = {
 }
 
 
+def compact_json(doc: dict) -> str:
+    """JSON of ``doc`` with floats to 6 significant digits, one run per line."""
+
+    def rnd(x):
+        if isinstance(x, float):
+            return float(f"{x:.6g}")
+        if isinstance(x, dict):
+            return {k: rnd(v) for k, v in x.items()}
+        if isinstance(x, list | tuple):
+            return [rnd(v) for v in x]
+        return x
+
+    d = rnd(doc)
+    runs = ",\n  ".join(json.dumps(r, separators=(",", ":")) for r in d.pop("runs"))
+    head = json.dumps(d)[:-1]
+    return f'{head}, "runs": [\n  {runs}\n]}}\n'
+
+
 def main(argv: list[str] | None = None) -> dict:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true", help="one short run (CI)")
@@ -607,7 +625,7 @@ def main(argv: list[str] | None = None) -> dict:
                 done[key] = run_case(Case(**kw))
             results.append(done[key])
         doc = {"set": name, "dt": DT, "runs": results}
-        (out / f"grate_{name}.json").write_text(json.dumps(doc, indent=1))
+        (out / f"grate_{name}.json").write_text(compact_json(doc))
         picture(results, out / f"grate_{name}.png", f"grate: {name}")
         summary[name] = doc
     return summary
