@@ -121,3 +121,20 @@ def test_machine_quick_run_balances():
     own = m.own_level(2.0 * m.sim.bodies.radius)
     assert np.all((lev == 0) | (lev >= own))
     assert math.isfinite(out["machine_efficiency"])
+
+
+@pytest.mark.slow
+def test_study_quick_runs_its_cases_and_draws(tmp_path):
+    import json
+
+    import screening_study
+
+    out = tmp_path / "study"
+    screening_study.main(["--quick", "--jobs", "1", "--output", str(out)])
+    data = json.loads(out.with_suffix(".json").read_text())
+    cases = data["results"]["barrel"]
+    assert sorted(r["x"] for r in cases) == [1.0, 2.0]   # fixed and oscillating barrel
+    for r in cases:
+        assert r["fed"] == r["exited"] + r["present"] + r["escaped"]
+        assert r["case"]["rpm"] == 150.0 and r["case"]["particles"] == 150
+    assert out.with_suffix(".png").stat().st_size > 10_000
