@@ -1,9 +1,9 @@
 """Parametric study of the tumbling screening machine (Alkhaldi 2007, sec. 4.4).
 
 Runs the sweeps of the thesis on ``examples/screening_machine.py``'s machine, one case per
-worker process (``concurrent.futures.ProcessPoolExecutor`` from the standard library: it
-keeps a pool of workers, hands them the cases and returns results or the worker's own
-exception, so no process management is written here), then draws the efficiency against
+worker process (``concurrent.futures.ProcessPoolExecutor`` from the standard library, its
+workers started fresh: it keeps the pool, hands them the cases and returns results or the
+worker's own exception, so no process management is written here), then draws the efficiency against
 each parameter beside the thesis' figures and writes every case's figures to JSON.
 
 Sweeps (each against the reference case: 50 rpm, alpha = 1 deg, beta = 0.65 deg,
@@ -33,6 +33,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import multiprocessing
 import os
 import sys
 import time
@@ -142,7 +143,10 @@ def main(argv: list[str] | None = None) -> None:
                 for n, x, c in cases(["barrel"], base)[1:]]
     results: dict[str, list[dict]] = {}
     t0 = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+    # fresh interpreters ("spawn"), not forks: a fork of a process whose numba threading
+    # layer (OpenMP) has started can die in the child
+    spawn = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=max(1, args.jobs), mp_context=spawn) as pool:
         jobs = {pool.submit(run_case, c): (n, x) for n, x, c in todo}
         for fut in as_completed(jobs):
             name, x = jobs[fut]
