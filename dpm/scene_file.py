@@ -13,6 +13,7 @@ is built.
 from __future__ import annotations
 
 import difflib
+import re
 import tomllib
 from collections.abc import Iterable
 from pathlib import Path
@@ -46,8 +47,53 @@ def read_scene(path: str | Path) -> dict[str, Any]:
         raise ParameterError(f"{path}: the scene file could not be read: {exc}") from None
     problems = scene_problems(doc, path.parent)
     if problems:
-        raise ParameterError("\n".join(f"{path}: {m}" for m in problems))
+        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+        raise ParameterError("\n".join(f"{path}: {m}{_where_in_file(lines, m)}"
+                                       for m in problems))
     return doc
+
+
+_HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z0-9_.\"-]+)\s*\]\]?")
+_UNKNOWN = re.compile(r"^(?P<where>.*?): unknown key (?P<key>\S+) = ")
+
+
+def _where_in_file(lines: list[str], message: str) -> str:
+    """`` (line N)`` for an unknown-key message: the line of the key in the table the
+    message names (``[simulation]``, ``boundaries[1]``, ``the file``; an inline table's
+    key on its line); empty where it cannot be told."""
+    m = _UNKNOWN.match(message)
+    if not m:
+        return ""
+    where, key = m.group("where"), m.group("key")
+    # sections: (header, name, occurrence of an [[array]] name, first line, end line)
+    sections: list[list] = [["", "", 0, 0, len(lines)]]
+    seen: dict[str, int] = {}
+    for i, text in enumerate(lines):
+        h = _HEADER.match(text)
+        if h:
+            sections[-1][4] = i
+            name = h.group(2)
+            k = seen.get(name, 0)
+            if h.group(1) == "[[":
+                seen[name] = k + 1
+            sections.append([h.group(1), name, k, i + 1, len(lines)])
+    wanted = None
+    arr = re.match(r"^(\w+)\[(\d+)\]", where)
+    if where.startswith("the file"):
+        wanted = sections[0]
+    elif where.startswith("["):
+        name = where[1:where.find("]")]
+        wanted = next((s for s in sections if s[0] == "[" and s[1] == name), None)
+    elif arr:
+        wanted = next((s for s in sections if s[0] == "[[" and s[1] == arr.group(1)
+                       and s[2] == int(arr.group(2))), None)
+    pat = re.compile(r"(^|[{,]\s*)" + re.escape(key) + r"\s*=")
+    spans = [(wanted[3], wanted[4])] if wanted else []
+    for lo, hi in spans + [(0, len(lines))]:
+        hits = [i for i in range(lo, hi) if pat.search(lines[i].split("#")[0].strip())]
+        if len(hits) == 1 or (hits and (lo, hi) != (0, len(lines))):
+            return f" (line {hits[0] + 1})"
+    return ""
 
 
 def _line_of(path: Path, exc: Exception) -> str:

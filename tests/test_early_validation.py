@@ -360,6 +360,11 @@ step = 3
                  "uper", "inlets[0]: unknown key radious", "lattice: unknown key spacin",
                  "[run]: unknown key step = 3 (did you mean steps?); allowed: steps, until"):
         assert part in msg, msg
+    # each unknown key with the line it stands on (the file starts with an empty line)
+    lines = {line.split(": unknown key ")[1].split(" ")[0]: line.rsplit("(line ", 1)[-1]
+             for line in msg.splitlines()}
+    assert lines == {"gravty": "4)", "restitutoin": "9)", "uper": "12)", "radious": "14)",
+                     "spacin": "18)", "step": "20)"}, msg
 
 
 def test_cli_reports_scene_errors_without_traceback(tmp_path, capsys):
