@@ -186,6 +186,23 @@ def spheres_walls(backend: dict, jitter: float = 0.0, friction_scale: float = 1.
     return sim, 400
 
 
+def drum_and_pipe(sim: dpm.Simulation, steel: dpm.Material) -> tuple[float, float]:
+    """The boundaries of ``clusters_pipes``: a capped drum (radius 15 mm, 20 mm long about
+    the y axis) turning at 10 rad/s, and a straight pipe (radius 4 mm) closed at its start,
+    joined at x = 0.06 to a quarter bend. Returns the drum's and the pipe's radius."""
+    r_drum, half = 0.015, 0.01
+    sim.add_boundary("tube", material=steel, start=(0, -half, 0), axis=(0, 1, 0),
+                     length=2 * half, radius=r_drum, caps="both",
+                     motion=dpm.Rotation(axis=(0, 1, 0), omega=10.0))
+    rp = 4e-3
+    sim.add_boundary("tube", material=steel, start=(0.03, 0, 0), axis=(1, 0, 0), length=0.03,
+                     radius=rp, caps="start")
+    sim.add_boundary("bend", material=steel, center=(0.06, 0.02, 0), axis=(0, 0, 1),
+                     start_direction=(0, -1, 0), bend_radius=0.02, pipe_radius=rp,
+                     angle=math.pi / 2)
+    return r_drum, rp
+
+
 def clusters_pipes(backend: dict, jitter: float = 0.0, friction_scale: float = 1.0,
                    dt_scale: float = 1.0) -> tuple[dpm.Simulation, int]:
     """Ellipsoids, cubes and spheres in a turning drum; balls and a cube rolling from a
@@ -194,17 +211,7 @@ def clusters_pipes(backend: dict, jitter: float = 0.0, friction_scale: float = 1
     sim = dpm.Simulation(dt=5e-6 * dt_scale, gravity=(0, 0, -G), **backend)
     glass, steel = _materials()
     _laws(sim, glass, steel, friction_scale, rolling=False)
-    r_drum, half = 0.015, 0.01
-    sim.add_boundary("tube", material=steel, start=(0, -half, 0), axis=(0, 1, 0),
-                     length=2 * half, radius=r_drum, caps="both",
-                     motion=dpm.Rotation(axis=(0, 1, 0), omega=10.0))
-    # a straight pipe closed at its start, joined at x = 0.06 to a quarter bend
-    rp = 4e-3
-    sim.add_boundary("tube", material=steel, start=(0.03, 0, 0), axis=(1, 0, 0), length=0.03,
-                     radius=rp, caps="start")
-    sim.add_boundary("bend", material=steel, center=(0.06, 0.02, 0), axis=(0, 0, 1),
-                     start_direction=(0, -1, 0), bend_radius=0.02, pipe_radius=rp,
-                     angle=math.pi / 2)
+    r_drum, rp = drum_and_pipe(sim, steel)
     rng = np.random.default_rng(5)
     # two rows of bodies along the drum's bottom (bounding radii 2 mm), moving outwards
     rows = [(r_drum - 2.1e-3, np.radians([-50, -25, 0, 25, 50])),

@@ -81,15 +81,7 @@ def _pipes_small(backend):
     sim = dpm.Simulation(dt=5e-6, gravity=(0, 0, -bc.G), device=backend)
     glass, steel = bc._materials()
     bc._laws(sim, glass, steel, 1.0, rolling=False)
-    sim.add_boundary("tube", material=steel, start=(0, -0.01, 0), axis=(0, 1, 0),
-                     length=0.02, radius=0.015, caps="both",
-                     motion=dpm.Rotation(axis=(0, 1, 0), omega=10.0))
-    rp = 4e-3
-    sim.add_boundary("tube", material=steel, start=(0.03, 0, 0), axis=(1, 0, 0), length=0.03,
-                     radius=rp, caps="start")
-    sim.add_boundary("bend", material=steel, center=(0.06, 0.02, 0), axis=(0, 0, 1),
-                     start_direction=(0, -1, 0), bend_radius=0.02, pipe_radius=rp,
-                     angle=math.pi / 2)
+    _, rp = bc.drum_and_pipe(sim, steel)
     rb = 1.5e-3
     z = -rp + rb - 5e-6  # (resting on the pipe's wall)
     v = np.tile([1.5, 0.0, 0.0], (2, 1))
