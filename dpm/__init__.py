@@ -37,7 +37,7 @@ from .motion import (
 )
 from .plugins import register, registry
 from .reciprocating import Reciprocating
-from .regions import BoxRegion, CylinderRegion, Region
+from .regions import BoxRegion, CylinderRegion, DiscFace, Face, MeshFace, RectangleFace, Region
 from .scene_tools import lattice
 from .shapes import Shape
 from .simulation import Simulation
@@ -50,4 +50,5 @@ __all__ = [
     "Oscillation", "Outlet", "ParameterError", "Region", "register", "registry", "restart",
     "Rotation", "SceneError", "Shape", "Simulation", "Translation", "TriangularOscillation",
     "Tumbling", "UnknownNameError", "UnstableRunError", "__version__", "Reciprocating",
+    "Face", "RectangleFace", "DiscFace", "MeshFace",
 ]

@@ -32,10 +32,12 @@ from .shapes import BUILTIN_SHAPES
 @hookimpl
 def dpm_register_shapes(register: Register) -> None:
     from .shapes.library import LibraryShape
+    from .shapes.multisphere import Multisphere
 
     for name, cls in BUILTIN_SHAPES.items():
         register(name, cls)
     register("library", LibraryShape)  # path = a grain's name or a .json file
+    register("multisphere", Multisphere)  # centres = [[x, y, z], ...], radii = [...]
 
 
 @hookimpl
@@ -88,10 +90,13 @@ def dpm_register_motions(register: Register) -> None:
 
 @hookimpl
 def dpm_register_regions(register: Register) -> None:
-    from .regions import BoxRegion, CylinderRegion
+    from .regions import BoxRegion, CylinderRegion, DiscFace, MeshFace, RectangleFace
 
     register("box", BoxRegion)
     register("cylinder", CylinderRegion)
+    register("rectangle_face", RectangleFace)
+    register("disc_face", DiscFace)
+    register("mesh_face", MeshFace)
 
 
 @hookimpl

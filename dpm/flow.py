@@ -9,6 +9,13 @@ or mass rate into its region, at random places where they overlap neither other 
 (bounding spheres) nor boundaries; what it cannot place is carried to the next event and
 counted in ``missed`` when the inlet stops.
 
+An inlet given a planar :class:`~dpm.regions.Face` (rectangle, disc or triangle mesh)
+inserts like LIGGGHTS' ``fix insert/stream``: each event places the bodies the coming
+interval brings in the slab behind the face that the interval carries through it (depth
+r to r + |v.n| every, r the body's bounding radius), and carries them at the velocity's
+normal part, free of gravity and contacts (infinite mass), until their centre has crossed
+the face; then they are released with ``velocity``.
+
 Plugins see both through the hooks ``dpm_on_particles_inserted`` and
 ``dpm_on_particles_removed``.
 """
@@ -24,7 +31,7 @@ import numpy as np
 from .errors import ParameterError
 from .material import Material
 from .parameters import Parameter, numeric_array, validate
-from .regions import Region
+from .regions import Face, Region
 
 RECORD_FIELDS = ("id", "time", "mass", "residence_time", "position", "velocity")
 
@@ -38,6 +45,10 @@ class Outlet:
         if not isinstance(region, Region):
             raise ParameterError(f"Outlet(): region={region!r} must be a dpm region "
                                  "(dpm.BoxRegion, dpm.CylinderRegion)")
+        if isinstance(region, Face):
+            raise ParameterError(f"Outlet(): region={region!r} is a face, which has no "
+                                 "volume to remove from; use dpm.BoxRegion or "
+                                 "dpm.CylinderRegion")
         if remove not in ("inside", "outside"):
             raise ParameterError(f"Outlet(): remove={remove!r}; allowed: inside, outside")
         validate("Outlet()", {"every": Parameter(low=0.0, low_open=True, unit="s")},
@@ -86,7 +97,15 @@ class Inlet:
     and the remaining keyword arguments give a single kind. New bodies start with
     ``velocity`` and random orientation (``random_orientation=True``, the default).
     ``seed`` makes the insertion reproducible.
+
+    With a :class:`~dpm.regions.Face` as ``region`` the inlet streams through the face
+    (LIGGGHTS' ``insert/stream``; the module docstring): ``velocity`` must cross it
+    (normal part at least 1e-3 m/s) and the slab one interval fills, |v.n| x ``every``
+    (LIGGGHTS' ``extrude_length``), must be at least the largest body's diameter.
     """
+
+    #: streaming through a face (set per inlet; the default for inlets pickled before)
+    stream = False
 
     parameters = {
         "rate": Parameter(default=None, low=0.0, low_open=True, unit="1/s"),
@@ -176,18 +195,128 @@ class Inlet:
         if not region.holds(r):
             raise ParameterError(f"{call}: region={region!r} is too small for the smallest "
                                  f"particle it inserts (bounding radius {r:g} m)")
+        #: stream insertion through a face: the unit normal along the velocity, the
+        #: carrying velocity (the normal part of ``velocity``) and the slab depth [m]
+        self.stream = isinstance(region, Face)
+        self.direction = np.zeros(3)
+        self.carry_velocity = self.velocity
+        self.extrude_length = 0.0
+        #: bodies being carried: id, position and time at insertion, release time,
+        #: mechanical energy booked
+        self.transit: dict[str, np.ndarray] = {
+            "id": np.zeros(0, np.int64), "x0": np.zeros((0, 3)), "t0": np.zeros(0),
+            "release": np.zeros(0), "energy": np.zeros(0)}
+        if self.stream:
+            self._start_stream(call)
+
+    def _start_stream(self, call: str) -> None:
+        n = self.region.normal
+        vn = float(self.velocity @ n)
+        if abs(vn) < 1e-3:
+            raise ParameterError(
+                f"{call}: velocity={tuple(float(x) for x in self.velocity)} crosses the face "
+                f"{self.region!r} at {abs(vn):.3g} m/s along its normal "
+                f"{tuple(float(x) for x in n)}; a stream inlet needs at least 1e-3 m/s "
+                "through the face")
+        self.direction = n if vn > 0 else -n
+        self.carry_velocity = abs(vn) * self.direction
+        self.extrude_length = abs(vn) * self.every
+        big = self.largest_radius()
+        if self.extrude_length < 2.0 * big:
+            raise ParameterError(
+                f"{call}: the slab one interval carries through the face, |v.n| x every = "
+                f"{abs(vn):g} m/s x {self.every:g} s = {self.extrude_length:.3g} m, is "
+                f"thinner than the largest body ({2 * big:.3g} m across); raise every to "
+                f"at least {2 * big / abs(vn):.3g} s (LIGGGHTS: extrude_length = |v.n| x "
+                "insert_every x dt)")
+
+    def _bounding_radii(self) -> list[float]:
+        return [float(cls(call="Inlet()", **params).build(1, self.material.density)
+                      .bounding_radius[0])
+                for (cls, low, high), f in zip(self.resolved, self.fractions, strict=True)
+                if f > 0 for params in (low, high)]
 
     def smallest_radius(self) -> float:
         """The smallest bounding radius [m] of what this inlet inserts: the least over the
         mix's shapes (fraction > 0) built at the low and at the high end of their
         ranges."""
         if self._smallest is None:
-            radii = [float(cls(call="Inlet()", **params).build(1, self.material.density)
-                           .bounding_radius[0])
-                     for (cls, low, high), f in zip(self.resolved, self.fractions, strict=True)
-                     if f > 0 for params in (low, high)]
-            self._smallest = min(radii)
+            self._smallest = min(self._bounding_radii())
         return self._smallest
+
+    def largest_radius(self) -> float:
+        """The largest bounding radius [m] of what this inlet inserts (as
+        :meth:`smallest_radius`)."""
+        return max(self._bounding_radii())
+
+    def candidates(self, radius: float) -> np.ndarray:
+        """``max_attempts`` random places for a body of bounding radius ``radius``: in the
+        region, or (a face) in the slab behind it at depth radius to radius +
+        ``extrude_length``."""
+        pts = self.region.sample(self.rng, self.max_attempts, radius)
+        if not self.stream:
+            return pts
+        depth = radius + self.rng.random(len(pts)) * self.extrude_length
+        return pts - depth[:, None] * self.direction
+
+    def placed(self, sim: Any, ids: np.ndarray) -> None:
+        """Bodies ``ids`` were just appended: a stream inlet starts carrying them
+        (infinite mass and inertia: no gravity, no contact moves them)."""
+        if not self.stream:
+            return
+        from .guards import mechanical_energy
+
+        b = sim.bodies
+        rows = _rows(b.id, ids)
+        x0 = b.position[rows].copy()
+        depth = (self.region.point - x0) @ self.direction
+        speed = float(np.linalg.norm(self.carry_velocity))
+        b.invmass[rows] = 0.0
+        b.invinertia[rows] = 0.0
+        b.angular_velocity[rows] = 0.0
+        e = np.array([mechanical_energy(b, sim.gravity, [r]) for r in rows])
+        add = {"id": np.asarray(ids, np.int64), "x0": x0, "t0": np.full(len(ids), sim.time),
+               "release": sim.time + np.maximum(depth, 0.0) / speed, "energy": e}
+        self.transit = {k: np.concatenate([self.transit[k], add[k]]) for k in self.transit}
+
+    def due(self, t: float) -> bool:
+        """Whether a carried body's centre has crossed the face by time ``t``."""
+        rel = self.transit["release"]
+        return bool(len(rel) and rel.min() <= t + 1e-9 * self.every)
+
+    def release(self, sim: Any) -> np.ndarray:
+        """Release the carried bodies whose centre has crossed the face by now: they get
+        back their mass and inertia and the position and velocity of a release at the
+        crossing followed by free flight (``velocity``, gravity) until now. Returns their
+        ids. Bodies removed meanwhile are forgotten."""
+        from .guards import mechanical_energy
+
+        tr, b, t = self.transit, sim.bodies, sim.time
+        present = np.isin(tr["id"], b.id)
+        go = present & (tr["release"] <= t + 1e-9 * self.every)
+        keep = present & ~go
+        ids = tr["id"][go]
+        if len(ids):
+            rows = _rows(b.id, ids)
+            t_rel = tr["release"][go]
+            tau = (t - t_rel)[:, None]
+            g = np.asarray(sim.gravity, float)
+            b.position[rows] = (tr["x0"][go] + (t_rel - tr["t0"][go])[:, None]
+                                * self.carry_velocity + self.velocity * tau + 0.5 * g * tau**2)
+            b.velocity[rows] = self.velocity + g * tau
+            b.angular_velocity[rows] = 0.0
+            b.invmass[rows] = 1.0 / b.mass[rows]
+            b.invinertia[rows] = 1.0 / b.inertia[rows]
+            if sim.energy.started:  # the carrying did work: book it as inserted
+                after = np.array([mechanical_energy(b, sim.gravity, [r]) for r in rows])
+                sim.energy.inserted += float(np.sum(after - tr["energy"][go]))
+        self.transit = {k: v[keep] for k, v in tr.items()}
+        return ids
+
+    @property
+    def carried(self) -> np.ndarray:
+        """Ids of the bodies being carried to the face now."""
+        return self.transit["id"].copy()
 
     def owed(self, t: float) -> float:
         """The bodies (or kg, for ``mass_rate``) due up to time t and not yet inserted.
@@ -211,11 +340,12 @@ class Inlet:
         """One body's shape name and parameters."""
         k = int(self.rng.choice(len(self.shapes), p=self.fractions))
         spec = self.shapes[k]
+        cls = self.resolved[k][0]
         params = {}
         for key, v in spec.items():
             if key in ("shape", "fraction"):
                 continue
-            if is_range(v):
+            if is_range(v, cls, key):
                 lo, hi = float(v[0]), float(v[1])
                 params[key] = lo + (hi - lo) * float(self.rng.random())
             else:
@@ -223,9 +353,21 @@ class Inlet:
         return spec.get("shape", "sphere"), params
 
 
-def is_range(v: Any) -> bool:
-    """A shape parameter given as a ``(low, high)`` pair (drawn uniformly per body)."""
-    return isinstance(v, tuple | list) and len(v) == 2 and not isinstance(v[0], str)
+def is_range(v: Any, cls: type | None = None, key: str = "") -> bool:
+    """A shape parameter given as a ``(low, high)`` pair of scalars (drawn uniformly per
+    body); never a parameter the shape class declares as a list (``kind="any"``, e.g. the
+    ``radii`` of a multisphere)."""
+    spec = getattr(cls, "parameters", {}).get(key)
+    if spec is not None and spec.kind == "any":
+        return False
+    return (isinstance(v, tuple | list) and len(v) == 2 and not isinstance(v[0], str)
+            and np.ndim(v[0]) == 0)
+
+
+def _rows(ids: np.ndarray, wanted: np.ndarray) -> np.ndarray:
+    """Rows of ``wanted`` ids (all present) in the id column ``ids``."""
+    order = np.argsort(ids, kind="stable")
+    return order[np.searchsorted(ids[order], wanted)]
 
 
 def resolve_shape(call: str, k: int, spec: Mapping) -> tuple[type, dict, dict]:
@@ -245,7 +387,7 @@ def resolve_shape(call: str, k: int, spec: Mapping) -> tuple[type, dict, dict]:
     for key, v in spec.items():
         if key in ("shape", "fraction"):
             continue
-        if is_range(v):
+        if is_range(v, cls, key):
             shown = f"{key}={tuple(v)!r}"
             ranges.append(shown)
             pair = numeric_array(v)

@@ -238,7 +238,17 @@ def flow_event(sim: Any) -> None:
                 sim._writer.write_removed(rec, k)
             call_hook(sim._registry, "dpm_on_particles_removed", sim=sim, outlet=outlet,
                       records=rec)
+    released = []
     for inlet in sim.inlets:
+        # (a stream inlet: its carried bodies that crossed the face are released)
+        if getattr(inlet, "stream", False) and inlet.due(sim.time):
+            snapshot_forces(sim)
+            ids = inlet.release(sim)
+            if len(ids):
+                changed = True
+                released.append(ids)
+                if sim._force_snapshot is not None:
+                    sim._force_snapshot["touched"].append(ids)
         ids = insert(sim, inlet)
         if len(ids):
             changed = True
@@ -246,6 +256,9 @@ def flow_event(sim: Any) -> None:
                       ids=ids)
     if changed and prepared:
         population_changed(sim)
+        if released:  # (their velocity changed: the integrator starts them afresh)
+            sim.integrator.start_bodies(
+                sim, np.flatnonzero(np.isin(sim.bodies.id, np.concatenate(released))))
 
 
 def inlet_shape(sim: Any, name: str, params: dict) -> Shape:
@@ -284,7 +297,7 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
         sh = inlet_shape(sim, *inlet.draw())
         batch = sh.build(1, inlet.material.density)
         rb = float(batch.bounding_radius[0])
-        cand = inlet.region.sample(inlet.rng, inlet.max_attempts, rb)
+        cand = inlet.candidates(rb)
         ok = np.ones(len(cand), bool)
         if tree is not None:
             for k, hits in enumerate(tree.query_ball_point(cand, rb + rmax)):
@@ -309,7 +322,9 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
              else np.array([[1.0, 0, 0, 0]]))
         q = q / np.linalg.norm(q, axis=1)[:, None]  # (as add_particles does)
         ids = append_bodies(sim, sh, imat, inlet.material.density, p[None],
-                            inlet.velocity[None], np.zeros((1, 3)), q)
+                            getattr(inlet, "carry_velocity", inlet.velocity)[None],
+                            np.zeros((1, 3)), q)
+        inlet.placed(sim, ids)
         new_ids.append(ids)
         placed_pos.append(p)
         placed_r.append(rb)

@@ -10,6 +10,7 @@ cluster of spheres (:mod:`dpm.shapes.cluster`), with mass properties of the idea
 from .base import BodyBatch, Shape
 from .cluster import Cluster, ClusterShape, MassProperties
 from .mesh import MeshShape
+from .multisphere import Multisphere
 from .solids import (
     Barrel,
     Block,
@@ -38,5 +39,6 @@ from . import library, metrics  # noqa: E402  (they use BUILTIN_SHAPES)
 __all__ = [
     "BUILTIN_SHAPES", "Barrel", "Block", "BodyBatch", "Cluster", "ClusterShape", "Cone", "Cube",
     "Cylinder", "Disc", "DoubleCone", "Ellipsoid", "Hyperboloid", "MassProperties", "MeshShape",
+    "Multisphere",
     "Parallelepiped", "Shape", "Sphere", "Tetrahedron", "Torus", "library", "metrics",
 ]
