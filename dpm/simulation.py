@@ -583,10 +583,19 @@ class Simulation:
                 population.share_sphere_arrays(self)
 
     def output(self, path: str, every: float | None = None,
-               every_steps: int | None = None, overwrite: bool = False) -> None:
+               every_steps: int | None = None, overwrite: bool = False,
+               fields: str | tuple[str, ...] = (), contacts: bool = False) -> None:
         """Write frames to HDF5 at ``path`` (+ XDMF beside it) every ``every`` seconds or
         ``every_steps`` steps. The file is created when the next run starts, with the state
         at that moment as its first frame.
+
+        ``fields`` adds per-particle fields to each frame (a name or a tuple of names;
+        ``"all"`` for every one): ``force`` and ``torque`` (the contact and body forces of
+        the step, gravity included), ``contact_count`` (touching contacts of each body,
+        other bodies and boundaries), ``rotation`` (the rotation matrix, 9 components, for
+        ParaView's tensor glyphs). ``contacts=True`` writes the touching pairs of each
+        frame with their forces, drawn as lines in ``run.contacts.xdmf`` (force chains).
+        Layout: docs/output-format.md.
 
         An existing file at ``path`` is kept: this raises :class:`ParameterError` unless
         ``overwrite=True``, which replaces it (and its XDMF sidecars) when the run starts.
@@ -596,7 +605,7 @@ class Simulation:
         must be writable, the path must not be a directory."""
         import os
 
-        from .io.hdf5 import check_output_path
+        from .io.hdf5 import check_output_fields, check_output_path
 
         call = "sim.output()"
         if isinstance(path, bool) or not isinstance(path, str | os.PathLike):
@@ -623,10 +632,19 @@ class Simulation:
                                      f"integer >= 1")
         if not isinstance(overwrite, bool | np.bool_):
             raise ParameterError(f"{call}: overwrite={overwrite!r}; allowed: True or False")
+        chosen = check_output_fields(fields, call)
+        if not isinstance(contacts, bool | np.bool_):
+            raise ParameterError(f"{call}: contacts={contacts!r}; allowed: True or False")
         target = os.path.realpath(name)
         w = self._writer
         appending = (w is not None and not w.closed
                      and os.path.realpath(w.path) == target)
+        if appending and (chosen != getattr(self, "_output_fields", ())
+                          or bool(contacts) != getattr(self, "_output_contacts", False)):
+            raise ParameterError(f"{call}: {name!r} is being written with fields="
+                                 f"{getattr(self, '_output_fields', ())!r}, contacts="
+                                 f"{getattr(self, '_output_contacts', False)!r}; its layout "
+                                 f"is fixed: call sim.close() first or choose another path")
         if not appending:
             # (MPI: rank 0 creates the file, maybe before another rank gets here)
             check_output_path(name, bool(overwrite) or not getattr(self.backend, "root",
@@ -634,6 +652,9 @@ class Simulation:
             self.close()
             self._output_path = name
             self._output_overwrite = bool(overwrite)
+        #: the optional per-particle fields and the contact output of the file
+        self._output_fields = chosen
+        self._output_contacts = bool(contacts)
         self._output_every_s = every
         self._output_every = None if every is not None else int(every_steps)
         if appending:

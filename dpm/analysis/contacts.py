@@ -52,8 +52,9 @@ def force_distribution(source: Any, bins: int = 30, subtract_gravity: bool = Tru
     """Distribution of the body force magnitudes ``|F| / <|F|>`` of a live Simulation (or of a
     namespace with ``force``, ``mass``): the net contact force on each body (the force sum
     less m g with ``subtract_gravity``; the gravity of the simulation). This is not the
-    distribution of single contact forces (which dpm does not hand out per pair): it is a
-    proxy with the same exponential-like tail in a static packing (the single-contact
+    distribution of single contact forces (those are :func:`dpm.io.contacts.pair_forces`
+    of a live Simulation, or ``run.contacts(k)`` of a run written with ``contacts=True``):
+    it is a proxy with the same exponential-like tail in a static packing (the single-contact
     distribution P(f) ~ exp(-beta f) is that of Mueth, Jaeger & Nagel 1998, Phys. Rev. E
     57, 3164; Radjai et al. 1996, Phys. Rev. Lett. 77, 274). Returns ``edges``,
     ``density`` (of the normalised force), ``mean`` [N] and ``values`` (normalised)."""

@@ -25,6 +25,7 @@ import numpy as np
 
 from .._lazy import lazy_module
 from ..errors import ParameterError
+from .contacts import CONTACT_FIELDS, PARTICLE_FIELDS
 
 h5py = lazy_module("h5py")
 
@@ -49,7 +50,8 @@ FIELDS = {
 UNITS = {"position": "m", "velocity": "m/s", "orientation": "", "angular_velocity": "rad/s",
          "radius": "m", "mass": "kg", "time": "s", "residence_time": "s", "force": "N",
          "torque": "N m", "kinetic_energy": "J", "work": "J", "dissipated": "J",
-         "surface": "m", "pose": "m (origin), 1 (rotation)", "local_vertices": "m"}
+         "surface": "m", "pose": "m (origin), 1 (rotation)", "local_vertices": "m",
+         "normal_force": "N", "overlap": "m", "point": "m", "ends": "m", "rotation": ""}
 #: per-element fields of clustered bodies: name -> (width, dtype)
 ELEMENT_FIELDS = {"position": (3, "f8"), "radius": (0, "f8"), "body_id": (0, "i8")}
 #: records of removed bodies (outlets): name -> (width, dtype)
@@ -59,6 +61,10 @@ REMOVED_FIELDS = {"id": (0, "i8"), "time": (0, "f8"), "mass": (0, "f8"),
 #: the frame table, one entry per frame (``time`` extended last)
 FRAME_FIELDS = {"time": "f8", "step": "i8", "start": "i8", "count": "i8",
                 "element_start": "i8", "element_count": "i8"}
+#: the frame table's columns of a file with contact output (``contacts=True``)
+CONTACT_FRAME_FIELDS = {"contact_start": "i8", "contact_count": "i8"}
+#: the names ``sim.output(fields=...)`` takes (``"all"``: every one)
+OUTPUT_FIELDS = tuple(PARTICLE_FIELDS)
 #: the thermo log (:class:`dpm.analysis.Thermo`): one float64 column each, ``time``
 #: extended last (its length is the number of complete rows)
 THERMO_COLUMNS = ("time", "step", "particles", "kinetic_energy", "contacts", "max_overlap",
@@ -66,6 +72,8 @@ THERMO_COLUMNS = ("time", "step", "particles", "kinetic_energy", "contacts", "ma
 #: the XDMF sidecar is rewritten after a frame when the last write is older than this [s]
 #: (and after the first frame, at every flush and at close)
 XDMF_INTERVAL_S = 5.0
+#: datasets a resume keeps whole (not rows of frames)
+_UNCUT = frozenset({"line_nodes"})
 #: rows copied at a time when a file is rebuilt (:meth:`Writer.resume`)
 _COPY_BLOCK_BYTES = 64 << 20
 
@@ -164,14 +172,36 @@ def check_output_path(path: str | Path, overwrite: bool, call: str = "sim.output
                              f"in {str(parent)!r} ({e.strerror or e})") from None
 
 
+def check_output_fields(fields: Any, call: str = "sim.output()") -> tuple[str, ...]:
+    """The optional per-particle fields named by ``fields`` (a name, ``"all"`` or an
+    iterable of names of :data:`OUTPUT_FIELDS`), in that table's order; ParameterError
+    naming the value and the allowed names otherwise."""
+    allowed = f"allowed: a name or a tuple of names of {', '.join(OUTPUT_FIELDS)}, or 'all'"
+    if isinstance(fields, str):
+        names = OUTPUT_FIELDS if fields == "all" else (fields,)
+    else:
+        names = fields
+    try:
+        names = list(names)
+    except TypeError:
+        raise ParameterError(f"{call}: fields={fields!r}; {allowed}") from None
+    for name in names:
+        if not isinstance(name, str) or name not in OUTPUT_FIELDS:
+            raise ParameterError(f"{call}: fields={fields!r}: {name!r} is not a field; "
+                                 f"{allowed}")
+    return tuple(k for k in OUTPUT_FIELDS if k in names)
+
+
 def sidecars(path: str | Path) -> tuple[Path, Path]:
     """The XDMF sidecars of a run file: ``run.xdmf`` and ``run.elements.xdmf``."""
     path = Path(path)
     return path.with_suffix(".xdmf"), path.with_suffix(".elements.xdmf")
 
 
-def _layout(f: Any, sim: Simulation) -> None:
-    """Attributes and every dataset (empty) of a new run file."""
+def _layout(f: Any, sim: Simulation, fields: tuple[str, ...] = (),
+            contacts: bool = False) -> None:
+    """Attributes and every dataset (empty) of a new run file; ``fields``: the optional
+    per-particle fields (:data:`OUTPUT_FIELDS`), ``contacts``: the contact output."""
     from .. import __version__
 
     f.attrs["format"] = FORMAT
@@ -193,11 +223,23 @@ def _layout(f: Any, sim: Simulation) -> None:
             chunk = (rows, width) if width else (rows,)
             g.create_dataset(field, shape=shape, maxshape=maxshape, dtype=dtype, chunks=chunk)
 
-    group("particles", {k: (w, d) for k, (w, d, _) in FIELDS.items()},
-          min(max(len(sim.bodies), 1), 65536))
+    prows = min(max(len(sim.bodies), 1), 65536)
+    group("particles", {k: (w, d) for k, (w, d, _) in FIELDS.items()}
+          | {k: PARTICLE_FIELDS[k] for k in fields}, prows)
+    if contacts:
+        g = f.create_group("contacts")
+        rows = 4 * prows
+        for name, (shape, dtype) in CONTACT_FIELDS.items():
+            g.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape), dtype=dtype,
+                             chunks=(rows, *shape))
+        # the lines' nodes of a frame of C contacts: rows 0 .. C - 1, [2 k, 2 k + 1]
+        # (grown to the largest frame; every frame's topology reads its first C rows)
+        g.create_dataset("line_nodes", shape=(0, 2), maxshape=(None, 2), dtype="i8",
+                         chunks=(rows, 2))
     # sphere elements of clustered bodies (empty when every body is one sphere)
     group("elements", ELEMENT_FIELDS, min(max(len(sim.elements), 1), 65536))
-    group("frames", {k: (0, d) for k, d in FRAME_FIELDS.items()}, 1024)
+    group("frames", {k: (0, d) for k, d in FRAME_FIELDS.items()}
+          | ({k: (0, d) for k, d in CONTACT_FRAME_FIELDS.items()} if contacts else {}), 1024)
     nb = max(len(sim.boundaries), 1)
     bg = f.create_group("boundaries")
     for name in ("force", "torque"):
@@ -267,7 +309,7 @@ def complete_frames(f: Any) -> tuple[int, int, int]:
     the length of ``/frames/time``, less any trailing frame whose rows are not all written
     (a file that a killed run left behind)."""
     fr = f["frames"]
-    n = min(len(fr[k]) for k in FRAME_FIELDS if k in fr)
+    n = min(len(fr[k]) for k in (*FRAME_FIELDS, *CONTACT_FRAME_FIELDS) if k in fr)
     if "boundaries" in f:
         n = min(n, *(len(f["boundaries"][k]) for k in f["boundaries"]))
     rows = min(len(f["particles"][k]) for k in f["particles"])
@@ -279,6 +321,8 @@ def complete_frames(f: Any) -> tuple[int, int, int]:
     ok = start + count <= rows
     if has_el:
         ok &= fr["element_start"][:n] + fr["element_count"][:n] <= erows
+    if "contact_start" in fr:
+        ok &= fr["contact_start"][:n] + fr["contact_count"][:n] <= contact_rows(f)
     if not ok.all():
         n = int(np.argmin(ok))
     if n == 0:
@@ -287,6 +331,13 @@ def complete_frames(f: Any) -> tuple[int, int, int]:
     end = int(start[k] + count[k])
     eend = int(fr["element_start"][k] + fr["element_count"][k]) if has_el else 0
     return n, end, eend
+
+
+def contact_rows(f: Any) -> int:
+    """Rows of ``/contacts`` written in full (0 for a file without contact output)."""
+    if "contacts" not in f:
+        return 0
+    return min(len(f["contacts"][k]) for k in CONTACT_FIELDS)
 
 
 def complete_removed(f: Any) -> int:
@@ -319,6 +370,7 @@ def _start_counts(w: Any, sim: Simulation) -> None:
     """A new file's counts: frames, particle and element rows, removal and thermo rows."""
     w.clusters = not (sim.plan is None or sim.plan.spheres_only)
     w.frames = w.rows = w.element_rows = w.removed = w.thermo_rows = 0
+    w.contact_rows = w.line_nodes = 0
 
 
 class Writer:
@@ -328,9 +380,19 @@ class Writer:
     existing file at ``path`` is kept and :class:`ParameterError` raised unless
     ``overwrite=True``, which replaces it and removes its XDMF sidecars.
     :meth:`resume` reopens an existing run file instead, cut back to a checkpoint.
+
+    ``fields`` (optional per-particle fields, :data:`OUTPUT_FIELDS`) and ``contacts`` (the
+    touching pairs per frame): None takes what ``sim.output()`` stored. The file's layout
+    says what each frame holds, so a resumed file goes on with the same fields.
     """
 
-    def __init__(self, path: str | Path, sim: Simulation, overwrite: bool = False) -> None:
+    def __init__(self, path: str | Path, sim: Simulation, overwrite: bool = False,
+                 fields: tuple[str, ...] | None = None, contacts: bool | None = None
+                 ) -> None:
+        if fields is None:
+            fields = tuple(getattr(sim, "_output_fields", ()))
+        if contacts is None:
+            contacts = bool(getattr(sim, "_output_contacts", False))
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         if self.path.is_dir():
@@ -340,12 +402,13 @@ class Writer:
         tmp = _temp_beside(self.path)
         try:
             with h5py.File(tmp, "w", libver="latest") as f:
-                _layout(f, sim)
+                _layout(f, sim, fields, contacts)
             _publish(tmp, self.path, overwrite)
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
-        for s in (*sidecars(self.path), self.path.with_suffix(".boundaries.xdmf")):
+        for s in (*sidecars(self.path), self.path.with_suffix(".boundaries.xdmf"),
+                  self.path.with_suffix(".contacts.xdmf")):
             s.unlink(missing_ok=True)  # (those of a replaced file describe other frames)
         self._open()
         _start_counts(self, sim)
@@ -405,11 +468,13 @@ class Writer:
             if max(len(sim.boundaries), 1) != nb:
                 raise ParameterError(f"{call}: the file has {nb} boundary column(s), the "
                                      f"simulation {len(sim.boundaries)} boundaries")
-            rows = erows = 0
+            rows = erows = crows = 0
             if frames:
                 fr, k = f["frames"], frames - 1
                 rows = int(fr["start"][k] + fr["count"][k])
                 erows = int(fr["element_start"][k] + fr["element_count"][k])
+                if "contact_start" in fr:
+                    crows = int(fr["contact_start"][k] + fr["contact_count"][k])
             has_thermo = "thermo" in f
             thermo = 0
             if has_thermo and frames:
@@ -417,7 +482,8 @@ class Writer:
                 thermo = int(np.searchsorted(times, f["frames/time"][frames - 1],
                                              side="right"))
             sizes = {"frames": frames, "boundaries": frames, "particles": rows,
-                     "elements": erows, "removed": removed, "thermo": thermo}
+                     "elements": erows, "removed": removed, "thermo": thermo,
+                     "contacts": crows}
             if not rebuild:
                 _truncate(f, sizes)
         finally:
@@ -433,6 +499,8 @@ class Writer:
         w.clusters = (erows > 0 if sim.plan is None else not sim.plan.spheres_only)
         w.frames, w.rows, w.element_rows, w.removed = frames, rows, erows, removed
         w.thermo_rows = thermo
+        w.contact_rows = crows
+        w.line_nodes = len(w.file["contacts/line_nodes"]) if "contacts" in w.file else 0
         w.write_xdmf()
         return w
 
@@ -452,6 +520,17 @@ class Writer:
             ds.resize(self.rows + n, axis=0)
             value = getattr(b, attr, None)  # (a stand-in state may lack the shape)
             ds[self.rows:self.rows + n] = 0 if value is None else value
+        extra = [k for k in PARTICLE_FIELDS if k in g]
+        if extra or "contacts" in self.file:
+            from .contacts import particle_values
+
+            to_host = getattr(getattr(sim, "backend", None), "to_host", None)
+            if to_host is not None:  # (the contact lists of a device backend)
+                to_host()
+        for name in extra:
+            ds = g[name]
+            ds.resize(self.rows + n, axis=0)
+            ds[self.rows:self.rows + n] = particle_values(sim, name)
         bg = self.file["boundaries"]
         nb = bg["force"].shape[1]
         for name in ("force", "torque"):
@@ -473,8 +552,13 @@ class Writer:
                 ds.resize(self.element_rows + m, axis=0)
                 ds[self.element_rows:self.element_rows + m] = values[name]
         fr = self.file["frames"]
-        for name, value in (("step", sim.step_count), ("start", self.rows), ("count", n),
-                            ("element_start", self.element_rows), ("element_count", m)):
+        columns = [("step", sim.step_count), ("start", self.rows), ("count", n),
+                   ("element_start", self.element_rows), ("element_count", m)]
+        nc = 0
+        if "contacts" in self.file:
+            nc = self._write_contacts(sim)
+            columns += [("contact_start", self.contact_rows), ("contact_count", nc)]
+        for name, value in columns:
             fr[name].resize(self.frames + 1, axis=0)
             fr[name][self.frames] = value
         # the frame count is the length of /frames/time: extended last, after a flush of
@@ -485,11 +569,31 @@ class Writer:
         self.file.flush()
         self.rows += n
         self.element_rows += m
+        self.contact_rows += nc
         self.frames += 1
         now = _time.monotonic()
         if self.frames == 1 or now - self._last_xdmf > XDMF_INTERVAL_S:
             self.write_xdmf()
             self._last_xdmf = now
+
+    def _write_contacts(self, sim: Simulation) -> int:
+        """This frame's touching pairs (:func:`dpm.io.contacts.contact_rows`) appended to
+        ``/contacts``; ``line_nodes`` grown to this frame's count. Returns the count."""
+        from .contacts import contact_rows
+
+        rows = contact_rows(sim)
+        g = self.file["contacts"]
+        k, nc = self.contact_rows, len(rows["id"])
+        for name in CONTACT_FIELDS:
+            ds = g[name]
+            ds.resize(k + nc, axis=0)
+            ds[k:k + nc] = rows[name]
+        if nc > self.line_nodes:
+            ds = g["line_nodes"]
+            ds.resize(nc, axis=0)
+            ds[self.line_nodes:nc] = 2 * np.arange(self.line_nodes, nc)[:, None] + [0, 1]
+            self.line_nodes = nc
+        return nc
 
     def _write_surfaces(self, sim: Simulation, bg: Any, nb: int) -> None:
         """This frame's pose of every boundary and the world vertices of its surface."""
@@ -567,6 +671,11 @@ class Writer:
             write_xdmf_from_arrays(self.path, fr["time"][:k], fr["element_start"][:k],
                                    fr["element_count"][:k], self.element_rows,
                                    group="elements")
+        if "contacts" in self.file:
+            from .xdmf import write_contacts_xdmf
+
+            write_contacts_xdmf(self.path, fr["time"][:k], fr["contact_start"][:k],
+                                fr["contact_count"][:k], self.contact_rows, self.line_nodes)
 
     @property
     def closed(self) -> bool:
@@ -621,13 +730,14 @@ class NullWriter:
 def _truncate(f: Any, sizes: dict[str, int]) -> None:
     """Cut every dataset of the groups in ``sizes`` to that many rows, in place: the frame
     count (``/frames/time``) and removal count (``/removed/id``) first."""
-    for group in ("frames", "removed", "thermo", "boundaries", "particles", "elements"):
+    for group in ("frames", "removed", "thermo", "boundaries", "particles", "elements",
+                  "contacts"):
         if group not in f:
             continue
         g = f[group]
         names = sorted(g, key=lambda k: k not in ("time", "id") or group == "particles")
         for name in names:
-            if g[name].shape[0] > sizes[group]:
+            if name not in _UNCUT and g[name].shape[0] > sizes[group]:
                 g[name].resize(sizes[group], axis=0)
     f.flush()
 
@@ -643,7 +753,9 @@ def _rebuild(path: Path, sizes: dict[str, int]) -> None:
                 out = dst.create_group(gname)
                 out.attrs.update(g.attrs)
                 for name, ds in g.items():
-                    rows = min(ds.shape[0], sizes.get(gname, ds.shape[0]))
+                    rows = ds.shape[0]
+                    if name not in _UNCUT:
+                        rows = min(rows, sizes.get(gname, rows))
                     new = out.create_dataset(name, shape=(rows,) + ds.shape[1:],
                                              # (a contiguous dataset stays contiguous)
                                              maxshape=ds.maxshape if ds.chunks else None,
@@ -675,6 +787,7 @@ class Run:
         with _open(self.path) as f:
             self.attrs: dict[str, Any] = dict(f.attrs)
             n, self._rows, self._element_rows = complete_frames(f)
+            self._contacts = "contacts" in f
             self.times = f["frames/time"][:n]
             self.steps = f["frames/step"][:n]
             self.start = f["frames/start"][:n]
@@ -708,10 +821,12 @@ class Run:
         return k % len(self)
 
     def frame(self, k: int) -> dict[str, np.ndarray]:
+        """The per-particle arrays of frame k (with the optional fields the file has:
+        force, torque, contact_count, rotation), its time and step."""
         k = self._index(k)
         a, n = int(self.start[k]), int(self.count[k])
         with _open(self.path) as f:
-            out = {name: f["particles"][name][a:a + n] for name in FIELDS
+            out = {name: f["particles"][name][a:a + n] for name in (*FIELDS, *PARTICLE_FIELDS)
                    if name in f["particles"]}  # (a file before "shape" lacks it)
         out["time"] = float(self.times[k])
         out["step"] = int(self.steps[k])
@@ -726,10 +841,26 @@ class Run:
             a, n = int(fr["element_start"][k]), int(fr["element_count"][k])
             return {name: f["elements"][name][a:a + n] for name in ELEMENT_FIELDS}
 
-    def field(self, name: str) -> list[np.ndarray]:
-        if name not in FIELDS:
-            raise KeyError(f"unknown field {name!r}; fields: {', '.join(FIELDS)}")
+    def contacts(self, k: int) -> dict[str, np.ndarray]:
+        """The touching pairs of frame k (a file written with ``contacts=True``): ``id``
+        (C, 2) body ids, ``ends`` (C, 2, 3) the two body centres, ``point``, ``force`` on
+        the first body (C, 3), ``normal_force``, ``overlap`` (C,). Raises KeyError for a
+        file without contact output."""
+        k = self._index(k)
         with _open(self.path) as f:
+            if "contacts" not in f:
+                raise KeyError(f"{self.path} has no contact output (sim.output(..., "
+                               f"contacts=True) writes it)")
+            fr = f["frames"]
+            a, n = int(fr["contact_start"][k]), int(fr["contact_count"][k])
+            return {name: f["contacts"][name][a:a + n] for name in CONTACT_FIELDS}
+
+    def field(self, name: str) -> list[np.ndarray]:
+        """One per-particle field over all frames (a list of arrays)."""
+        with _open(self.path) as f:
+            if name not in FIELDS and name not in f["particles"]:
+                raise KeyError(f"unknown field {name!r}; fields: "
+                               f"{', '.join(k for k in f['particles'])}")
             ds = f["particles"][name]
             return [ds[int(a):int(a) + int(n)] for a, n in zip(self.start, self.count,
                                                                strict=True)]
@@ -764,8 +895,10 @@ def check_xdmf(run: Run) -> None:
     """Rewrite the sidecar(s) of ``run`` (with a warning) when one lists another number of
     frames than the HDF5 file has (a killed run, or a file cut back by a resume)."""
     particles, elements = sidecars(run.path)
+    contacts = run.path.with_suffix(".contacts.xdmf")
     stale = []
-    for side, needed in ((particles, True), (elements, run._element_rows > 0)):
+    for side, needed in ((particles, True), (elements, run._element_rows > 0),
+                         (contacts, run._contacts)):
         if not needed:
             continue
         listed = _xdmf_frames(side)
@@ -778,7 +911,8 @@ def check_xdmf(run: Run) -> None:
     what = f"dpm.load({str(run.path)!r}): {' and '.join(stale)}, the file has {run.n_frames}"
     writable = (os.access(run.path, os.W_OK) and os.access(run.path.parent, os.W_OK)
                 and all(not s.exists() or os.access(s, os.W_OK) for s in (particles,
-                                                                            elements)))
+                                                                            elements,
+                                                                            contacts)))
     if not writable:
         warnings.warn(f"{what}; the file is read-only, the sidecar is not rewritten",
                       stacklevel=3)

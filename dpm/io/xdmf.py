@@ -1,6 +1,8 @@
 """XDMF sidecars so ParaView opens a dpm HDF5 run over time: ``run.xdmf`` (particles),
-``run.elements.xdmf`` (the sphere elements of clustered bodies) and
-``run.boundaries.xdmf`` (every boundary's surface as triangles, moving with it).
+``run.elements.xdmf`` (the sphere elements of clustered bodies),
+``run.boundaries.xdmf`` (every boundary's surface as triangles, moving with it) and
+``run.contacts.xdmf`` (the touching pairs as lines between the body centres, with their
+forces as cell attributes; written with ``sim.output(..., contacts=True)``).
 
 Read by ParaView's Xdmf3 reader and by VTK's ``vtkXdmfReader`` (the tests read every value
 back with the latter).
@@ -26,21 +28,38 @@ _ATTRS = {
     "mass": (0, "Float", 8),
     "material": (0, "Int", 4),
     "shape": (0, "Int", 4),
+    # optional fields (sim.output(fields=...)): written where the file has them
+    "force": (3, "Float", 8),
+    "torque": (3, "Float", 8),
+    "contact_count": (0, "Int", 4),
+    "rotation": (9, "Float", 8),
 }
+#: cell attributes of the contact lines: name -> (width, number type, precision)
+_CONTACT_ATTRS = {"force": (3, "Float", 8), "normal_force": (0, "Float", 8),
+                  "overlap": (0, "Float", 8), "point": (3, "Float", 8)}
 
 
-def _slab(h5name: str, field: str, start: int, count: int, width: int, rows: int,
-          ntype: str, prec: int, group: str = "particles") -> str:
-    if width:
-        dims, sel, full = f"{count} {width}", f"{start} 0 1 1 {count} {width}", f"{rows} {width}"
-        ndim = 2
-    else:
-        dims, sel, full = f"{count}", f"{start} 1 {count}", f"{rows}"
-        ndim = 1
-    return (f'<DataItem ItemType="HyperSlab" Dimensions="{dims}" Type="HyperSlab">'
-            f'<DataItem Dimensions="3 {ndim}" Format="XML">{sel}</DataItem>'
-            f'<DataItem Dimensions="{full}" NumberType="{ntype}" Precision="{prec}" '
+def _slab(h5name: str, field: str, start: int, count: int, width: int | tuple[int, ...],
+          rows: int, ntype: str, prec: int, group: str = "particles",
+          dims: str | None = None) -> str:
+    """Rows ``start : start + count`` of the dataset ``group/field`` of ``rows`` rows of
+    ``width`` values (0: one scalar; a tuple: a row's shape), as a hyperslab DataItem of
+    ``dims`` (default: count x width)."""
+    shape = (width,) if isinstance(width, int) and width else tuple(width or ())
+    tail = "".join(f" {w}" for w in shape)
+    sel = (f"{start}{' 0' * len(shape)} 1{' 1' * len(shape)} {count}{tail}")
+    return (f'<DataItem ItemType="HyperSlab" Dimensions="{dims or f"{count}{tail}"}" '
+            f'Type="HyperSlab">'
+            f'<DataItem Dimensions="3 {1 + len(shape)}" Format="XML">{sel}</DataItem>'
+            f'<DataItem Dimensions="{rows}{tail}" NumberType="{ntype}" Precision="{prec}" '
             f'Format="HDF">{h5name}:/{group}/{field}</DataItem></DataItem>')
+
+
+def _attribute(name: str, width: int, center: str, slab: str) -> str:
+    """An Attribute element: a scalar (width 0), a 3x3 tensor (9) or a vector."""
+    # (a quaternion is a "Vector" of 4: "Matrix" reads as one tuple of 4 n values)
+    kind = "Scalar" if width == 0 else "Tensor" if width == 9 else "Vector"
+    return f'<Attribute Name="{name}" AttributeType="{kind}" Center="{center}">{slab}</Attribute>'
 
 
 _ELEMENT_ATTRS = {"radius": (0, "Float", 8), "body_id": (0, "Int", 8)}
@@ -64,10 +83,8 @@ def write_xdmf_from_arrays(h5path: Path, times, starts, counts, rows: int,
                    f'<Geometry GeometryType="XYZ">'
                    f'{_slab(name, "position", a, n, 3, rows, "Float", 8, group)}</Geometry>')
         for field, (w, ntype, prec) in attrs.items():
-            # (a quaternion is a "Vector" of 4: "Matrix" reads as one tuple of 4 n values)
-            kind = "Scalar" if w == 0 else "Vector"
-            out.append(f'<Attribute Name="{field}" AttributeType="{kind}" Center="Node">'
-                       f'{_slab(name, field, a, n, w, rows, ntype, prec, group)}</Attribute>')
+            out.append(_attribute(field, w, "Node",
+                                  _slab(name, field, a, n, w, rows, ntype, prec, group)))
         out.append("</Grid>")
     out.append("</Grid></Domain></Xdmf>")
     path = h5path.with_suffix(".xdmf" if group == "particles" else ".elements.xdmf")
@@ -101,6 +118,40 @@ def write_boundaries_xdmf(h5path: Path, times, nverts: int, nfaces: int) -> Path
     return _publish_text(h5path.with_suffix(".boundaries.xdmf"), out)
 
 
+def write_contacts_xdmf(h5path: Path, times, starts, counts, rows: int,
+                        line_nodes: int) -> Path:
+    """Write ``<run>.contacts.xdmf``: per frame the touching pairs of ``/contacts`` as
+    lines (a Polyline topology of 2 nodes each) from body i's centre to body j's
+    (``/contacts/ends``), with id_i, id_j, force, normal_force, overlap and point as cell
+    attributes."""
+    h5path = Path(h5path)
+    name = h5path.name
+    out = ['<?xml version="1.0" ?>', '<Xdmf Version="3.0"><Domain>',
+           '<Grid Name="contacts" GridType="Collection" CollectionType="Temporal">']
+    for t, a, n in zip(times, starts, counts, strict=True):
+        a, n = int(a), int(n)
+        out.append(
+            f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
+            f'<Topology TopologyType="Polyline" NodesPerElement="2" NumberOfElements="{n}">'
+            f'{_slab(name, "line_nodes", 0, n, 2, line_nodes, "Int", 8, "contacts")}'
+            f'</Topology><Geometry GeometryType="XYZ">'
+            f'{_slab(name, "ends", a, n, (2, 3), rows, "Float", 8, "contacts", f"{2 * n} 3")}'
+            f'</Geometry>')
+        for field, (w, ntype, prec) in _CONTACT_ATTRS.items():
+            out.append(_attribute(field, w, "Cell",
+                                  _slab(name, field, a, n, w, rows, ntype, prec, "contacts")))
+        # the two body ids as scalars, columns of /contacts/id (a "Vector" of 2 reads as 3)
+        for col, label in enumerate(("id_i", "id_j")):
+            out.append(_attribute(label, 0, "Cell", (
+                f'<DataItem ItemType="HyperSlab" Dimensions="{n}" Type="HyperSlab">'
+                f'<DataItem Dimensions="3 2" Format="XML">{a} {col} 1 1 {n} 1</DataItem>'
+                f'<DataItem Dimensions="{rows} 2" NumberType="Int" Precision="8" '
+                f'Format="HDF">{name}:/contacts/id</DataItem></DataItem>')))
+        out.append("</Grid>")
+    out.append("</Grid></Domain></Xdmf>")
+    return _publish_text(h5path.with_suffix(".contacts.xdmf"), out)
+
+
 def _publish_text(path: Path, out: list[str]) -> Path:
     """Write the lines ``out`` to ``path`` atomically: a kill never leaves a half-written
     sidecar (a unique temporary name, so two processes rewriting the same sidecar do not
@@ -120,7 +171,7 @@ def _publish_text(path: Path, out: list[str]) -> Path:
 def write_xdmf(h5path: str | Path) -> Path:
     """(Re)write the XDMF sidecar(s) of an existing dpm HDF5 run for its complete frames;
     returns the path of ``run.xdmf``."""
-    from .hdf5 import complete_frames
+    from .hdf5 import complete_frames, contact_rows
 
     with h5py.File(h5path, "r", libver="latest", swmr=True) as f:
         n, _, erows = complete_frames(f)
@@ -131,6 +182,11 @@ def write_xdmf(h5path: str | Path) -> Path:
         if "surfaces" in f and len(f["surfaces/faces"]):
             write_boundaries_xdmf(Path(h5path), f["frames/time"][:n],
                                   f["boundaries/surface"].shape[1], len(f["surfaces/faces"]))
+        if "contacts" in f:
+            fr = f["frames"]
+            write_contacts_xdmf(Path(h5path), fr["time"][:n], fr["contact_start"][:n],
+                                fr["contact_count"][:n], contact_rows(f),
+                                len(f["contacts/line_nodes"]))
         return write_xdmf_from_arrays(Path(h5path), f["frames/time"][:n], f["frames/start"][:n],
                                       f["frames/count"][:n], len(f["particles/id"]),
                                       fields=set(f["particles"]))
