@@ -12,7 +12,7 @@ counted in ``missed`` when the inlet stops.
 An inlet given a planar :class:`~dpm.regions.Face` (rectangle, disc or triangle mesh)
 inserts like LIGGGHTS' ``fix insert/stream``: each event places the bodies the coming
 interval brings in the slab behind the face that the interval carries through it (depth
-r to r + |v.n| every, r the body's bounding radius), and carries them at the velocity's
+r to r + ``|v.n| every``, r the body's bounding radius), and carries them at the velocity's
 normal part, free of gravity and contacts (infinite mass), until their centre has crossed
 the face; then they are released with ``velocity``.
 
@@ -100,7 +100,7 @@ class Inlet:
 
     With a :class:`~dpm.regions.Face` as ``region`` the inlet streams through the face
     (LIGGGHTS' ``insert/stream``; the module docstring): ``velocity`` must cross it
-    (normal part at least 1e-3 m/s) and the slab one interval fills, |v.n| x ``every``
+    (normal part at least 1e-3 m/s) and the slab one interval fills, ``|v.n| x every``
     (LIGGGHTS' ``extrude_length``), must be at least the largest body's diameter.
     """
 

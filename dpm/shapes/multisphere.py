@@ -84,7 +84,7 @@ class Multisphere(ClusterShape):
         return _in_union(np.asarray(points, float), c, r)
 
     def depth(self, points):
-        """max_i (r_i - |p - c_i|): the depth below the deepest sphere (a lower bound of
+        """``max_i (r_i - |p - c_i|)``: the depth below the deepest sphere (a lower bound of
         the union's depth near the seams)."""
         c, r = self._frame()
         p = np.asarray(points, float)
