@@ -482,6 +482,71 @@ def test_scene_binds_only_the_laws_it_uses(monkeypatch):
     assert "law_hooke" not in src and "law_linear" not in src
 
 
+# ------------------------------------------------------------------------ tangential spring
+
+
+def _push_then_return(t, v, t_end):
+    """Two steps forward at v, then back at v/30: the dashpot makes the contact slide at
+    once, and the slow return lets the spring give back what it holds."""
+    return (v, 0.0) if t < t_end / 640 else (-v / 30.0, 0.0)
+
+
+def _circle(t, v, t_end):
+    """The slip turns in the tangent plane at constant speed (sliding throughout)."""
+    a = 8.0 * math.pi * t / t_end
+    return v * math.cos(a), v * math.sin(a)
+
+
+def _oscillation(t, v, t_end):
+    """Back and forth, amplitude 1.27 mu F_n / k_t: it slides near each end."""
+    return v * math.cos(4.0 * math.pi * t / t_end), 0.0
+
+
+@pytest.mark.parametrize("slip, dashpot", [
+    (_push_then_return, 3.0), (_circle, 0.0), (_circle, 0.5), (_circle, 3.0),
+    (_oscillation, 0.0), (_oscillation, 0.5), (_oscillation, 3.0)],
+    ids=["push_then_return-3", "circle-0", "circle-0.5", "circle-3", "oscillation-0",
+         "oscillation-0.5", "oscillation-3"])
+def test_sliding_tangential_spring_dashpot_gains_no_energy(slip, dashpot):
+    """A contact with a tangential dashpot is passive while it slides: the spring never holds
+    more elastic energy than the relative motion gave it, so the work W = sum F_t . v_t dt
+    that the tangential force does on the motion is at every step at most -k_t |s|^2 / 2
+    (the contact dissipates -W - k_t |s|^2/2 >= 0), and never positive.
+
+    The spring-dashpot of every tangential part (:func:`dpm.kernels.tangential.
+    spring_coulomb`) is driven directly with a prescribed slip velocity at a constant
+    normal force; the dashpot alone, c_t |v_t|, is ``dashpot`` times mu F_n. The former
+    sliding reset s = -F_t/k_t (F_t the clipped spring + dashpot) put the whole Coulomb
+    force into the spring at the first sliding step: the spring held up to 0.98 of
+    (mu F_n)^2 / (2 k_t) more than it had received, and in the push-then-return slip gave
+    0.61 of it back to the motion (W > 0)."""
+    from dpm.kernels.tangential import spring_coulomb
+
+    kt, mu, fn, v = 1e3, 0.3, 1.0, 0.01
+    ct = dashpot * mu * fn / v
+    t_end = 16.0 * mu * fn / (kt * v)  # the spring reaches mu F_n after 1/16 of it
+    n = 1600
+    dt = t_end / n
+    scale = (mu * fn) ** 2 / (2.0 * kt)  # the spring's energy at the Coulomb limit
+    hist = np.zeros((1, 8))
+    work, least, most, largest_u, slid = 0.0, 0.0, -math.inf, 0.0, False
+    for i in range(n):
+        vx, vy = slip(i * dt, v, t_end)
+        fx, fy, fz = spring_coulomb(kt, ct, mu, fn, vx, vy, 0.0, 0.0, 0.0, 1.0, dt, hist, 0)
+        assert fz == 0.0 and hist[0, 2] == 0.0
+        f = math.hypot(fx, fy)
+        assert f <= mu * fn * (1.0 + 1e-12)
+        slid |= f >= mu * fn * (1.0 - 1e-12)
+        work += (fx * vx + fy * vy) * dt
+        u = 0.5 * kt * (hist[0, 0] ** 2 + hist[0, 1] ** 2)
+        largest_u = max(largest_u, u)
+        least = min(least, (-work - u) / scale)
+        most = max(most, work / scale)
+    assert slid and largest_u > 0.2 * scale  # the contact slides and loads its spring
+    assert least >= -1e-12
+    assert most <= 1e-12
+
+
 # ------------------------------------------------------------------------ oblique impacts
 
 

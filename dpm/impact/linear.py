@@ -104,9 +104,11 @@ class LinearTangential(TangentialPart):
         F_t = -(k_t s + c_t v_t), |F_t| <= mu F_n,  k_t = kappa k_n,  c_t = 2 zeta_t sqrt(m* k_n)
 
     k_n is the normal part's stiffness; the spring s has history (projected on the tangent
-    plane) and carries mu F_n alone while sliding. Slots (mu, kappa, zeta_t); zeta_t
-    defaults to the linear damping ratio of the restitution. ``tangential_stiffness_ratio=0``
-    gives the thesis' viscous ``F_t = min(c_t |v_t|, mu F_n)`` (eq. 2.28).
+    plane) and sliding shortens it, never lengthens it, so that it alone carries at most
+    mu F_n (:func:`dpm.kernels.tangential.spring_coulomb_at`). Slots (mu, kappa, zeta_t);
+    zeta_t defaults to the linear damping ratio of the restitution.
+    ``tangential_stiffness_ratio=0`` gives the thesis' viscous ``F_t = min(c_t |v_t|, mu F_n)``
+    (eq. 2.28).
     """
 
     name = "linear_spring_coulomb"

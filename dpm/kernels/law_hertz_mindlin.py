@@ -10,13 +10,14 @@ Tangential (Mindlin 1949, no-slip stiffness):
 beta is solved in the object layer so that the restitution with the attractive force cut
 off is the one set (:func:`dpm.impact.collision.tsuji_beta_for_restitution`).
 
-Sliding: when |-(k_t s + c_t v_t)| exceeds mu F_n the force is set to the Coulomb limit and
-the spring to s = -F_t / k_t, i.e. the spring alone carries the sliding force and the
-dashpot rests, as in LIGGGHTS ``tangential history`` and Yade's Mindlin law. (LAMMPS' older
-form stores s = -(F_t + c_t v_t)/k_t; with k_t and c_t growing with the overlap the stored
-spring then pulls the force below the limit while the contact slides: an oblique impact far
-in the sliding regime, tan(psi) = 8 x the sticking limit, lost 11 % of its friction impulse
-at e = 0.5.)
+Sliding: the spring alone is limited to mu F_n (k_t |s| > mu F_n shortens it to
+s mu F_n / (k_t |s|), as in LIGGGHTS ``tangential history``; it is never lengthened), and
+spring plus dashpot, -(k_t s + c_t v_t), are limited to mu F_n. (LAMMPS' older form stores
+s = -(F_t + c_t v_t)/k_t; with k_t and c_t growing with the overlap the stored spring then
+pulls the force below the limit while the contact slides: an oblique impact far in the
+sliding regime, tan(psi) = 8 x the sticking limit, lost 11 % of its friction impulse at
+e = 0.5. Resetting it to s = -F_t/k_t instead loads the spring with the dashpot's share of
+the force, energy it gives back: :mod:`.tangential`.)
 
 Slots: normal (E*, beta); tangential :func:`.tangential.mindlin_tsuji_tangential`
 (G*, beta, mu): the two share the slot beta.

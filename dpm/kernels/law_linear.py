@@ -2,8 +2,9 @@
 
 Normal:      F_n = max(0, k_n delta + c_n delta'),   c_n = 2 zeta sqrt(m* k_n)
 Tangential:  spring-dashpot with history and Coulomb limit
-             (:func:`.tangential.spring_coulomb`: while sliding the spring alone
-             carries mu F_n), k_t = kappa k_n,  c_t = 2 zeta_t sqrt(m* k_n)
+             (:func:`.tangential.spring_coulomb`: sliding shortens the spring to
+             carry at most mu F_n alone, never lengthens it; spring plus dashpot are
+             limited to mu F_n), k_t = kappa k_n,  c_t = 2 zeta_t sqrt(m* k_n)
 
 The damping ratio zeta is solved in the object layer so that the restitution coefficient
 *with the attractive force cut off* equals the one the user set (Schwager & Poschel 2007:

@@ -10,14 +10,23 @@ fn: the repulsive normal force (before any adhesion), kn: the normal part's stif
 (linear laws their k_n, Hertz laws S_n = 2 E* sqrt(R* d)), h: the offset of the part's
 history floats in ``hist[k]``. The shared spring:
 
-    s   <- P_n (s + v_t dt)                 (history, projected on the tangent plane)
-    F_t  = -k_t s - c_t v_t
-    if |F_t| > mu F_n:  F_t <- mu F_n F_t/|F_t|,  s <- -F_t / k_t   (sliding)
+    s   <- P_n (s + v_t dt)                  (history, projected on the tangent plane)
+    s   <- s min(1, mu F_n / (k_t |s|))      (the spring alone never exceeds mu F_n)
+    F_t  = -k_t s - c_t v_t,  F_t <- F_t min(1, mu F_n / |F_t|)   (spring + dashpot)
 
-Cundall & Strack (1979). While sliding the spring alone carries mu F_n and the dashpot
-rests, as in LIGGGHTS and Yade. (LAMMPS' older form stores s = -(F_t + c_t v_t)/k_t, which
-loses 11-21 % of the sliding friction impulse of a Hertz-Mindlin oblique impact: the
-oblique-impact tests of tests/test_impact_models.py fail with it.)
+Cundall & Strack (1979). Sliding only ever shortens the spring: it keeps at most the
+displacement the relative motion gave it, so the elastic energy it stores, k_t |s|^2 / 2,
+is never more than the work it received, and a sliding contact dissipates. The earlier
+reset s = -F_t/k_t, with F_t the clipped total (spring + dashpot), lengthened the spring
+whenever the dashpot had pushed the total over mu F_n: the spring was loaded with the
+dashpot's force, energy the contact never received, and gave it back as the contact
+unloaded (a tangential dashpot then added energy to a sliding contact: docs/validation.md,
+Findings). LIGGGHTS (``tangential history``) clips the spring the same way, testing the
+spring alone against mu F_n, but adds the dashpot only while the spring sticks, unclipped;
+here the total is clipped as well, so |F_t| <= mu F_n always. (LAMMPS' older form and
+MercuryDPM store s = -(F_t + c_t v_t)/k_t, which loses 11-21 % of the sliding friction
+impulse of a Hertz-Mindlin oblique impact: the oblique-impact tests of
+tests/test_impact_models.py fail with it.)
 """
 
 import math
@@ -39,8 +48,9 @@ def spring_coulomb_at(kt, ct, mu, fn, vtx, vty, vtz, nx, ny, nz, dt, hist, k, h)
     """Tangential spring-dashpot with history in ``hist[k, h:h+3]`` and Coulomb limit.
 
         s   <- P_n (s + v_t dt)                   (projected on the tangent plane)
-        F_t  = -k_t s - c_t v_t
-        if |F_t| > mu F_n:  F_t <- mu F_n F_t/|F_t|,  s <- -F_t / k_t   (sliding)
+        s   <- s min(1, mu F_n / (k_t |s|))       (sliding shortens the spring, never
+                                                   lengthens it)
+        F_t  = -k_t s - c_t v_t,  F_t <- F_t min(1, mu F_n / |F_t|)
     """
     sx = hist[k, h] + vtx * dt
     sy = hist[k, h + 1] + vty * dt
@@ -49,24 +59,23 @@ def spring_coulomb_at(kt, ct, mu, fn, vtx, vty, vtz, nx, ny, nz, dt, hist, k, h)
     sx -= sn * nx
     sy -= sn * ny
     sz -= sn * nz
+    fmax = mu * max(fn, 0.0)
+    fmax2 = fmax * fmax
+    ks2 = kt * kt * (sx * sx + sy * sy + sz * sz)
+    if ks2 > fmax2:  # the spring alone exceeds the limit: shorten it to carry mu F_n
+        r = fmax / math.sqrt(ks2)
+        sx *= r
+        sy *= r
+        sz *= r
     ftx = -kt * sx - ct * vtx
     fty = -kt * sy - ct * vty
     ftz = -kt * sz - ct * vtz
     ft2 = ftx * ftx + fty * fty + ftz * ftz
-    fmax = mu * max(fn, 0.0)
-    if ft2 > fmax * fmax:  # (squares: a sticking contact needs no square root)
+    if ft2 > fmax2:  # (squares: a sticking contact needs no square root)
         r = fmax / math.sqrt(ft2)
         ftx *= r
         fty *= r
         ftz *= r
-        if kt > 0.0:
-            sx = -ftx / kt
-            sy = -fty / kt
-            sz = -ftz / kt
-        else:
-            sx = 0.0
-            sy = 0.0
-            sz = 0.0
     hist[k, h] = sx
     hist[k, h + 1] = sy
     hist[k, h + 2] = sz
