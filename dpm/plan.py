@@ -285,14 +285,19 @@ def render(laws: list[tuple[str, str]], integrator_module: str,
     (module, function)), integrator, boundary kinds, periodic axes and force pass
     (``fused``: every body a single sphere)."""
     lines, body = _laws(laws)
-    if hasattr(importlib.import_module(integrator_module), "pre_force_sphere"):
-        lines.append(f"from {integrator_module} import pre_force_body, pre_force_sphere, "
-                     "post_force_body")
-    else:  # (optional: the pre-force part of a sphere whose orientation is not tracked)
-        lines.append(f"from {integrator_module} import pre_force_body, post_force_body")
-        lines.append("pre_force_sphere = pre_force_body")
+    lines += integrator_lines(integrator_module)
     lines += _closest_lines(kinds or [], periodic, fused)
     return _splice("step.py", lines + body)
+
+
+def integrator_lines(integrator_module: str) -> list[str]:
+    """The bindings lines importing an integrator's per-body parts."""
+    if hasattr(importlib.import_module(integrator_module), "pre_force_sphere"):
+        return [f"from {integrator_module} import pre_force_body, pre_force_sphere, "
+                "post_force_body"]
+    # (optional: the pre-force part of a sphere whose orientation is not tracked)
+    return [f"from {integrator_module} import pre_force_body, post_force_body",
+            "pre_force_sphere = pre_force_body"]
 
 
 def render_implicit(laws) -> str:

@@ -14,6 +14,7 @@ from typing import Any
 import numba
 import numpy as np
 
+from .. import warm
 from ..errors import ParameterError
 from .base import (
     STATUS_OK,
@@ -70,12 +71,22 @@ class CpuBackend:
         every ``sort_every`` list rebuilds (0, the default: never), so that neighbours
         sit close in memory (:meth:`sort_by_cell`). Rows of ``sim.bodies`` then change
         order (ids do not); the sums of a body's forces may change by rounding.
+    kernels : {"auto", "scene", "universal"}, optional
+        Which step module runs the scene (:mod:`dpm.warm`): "scene", its own (compiled
+        at its first run, then cached); "universal", the integrator's module for every
+        scene of built-in parts (compiled once, by ``dpm compile``; same results bit for
+        bit, slower); "auto" (default, or ``$DPM_KERNELS``): its own when compiled
+        before, else the universal one when compiled (and its own compiled in the
+        background for the next run), else its own.
     """
 
     name = "cpu"
+    #: whether this backend can run the universal step module (the MPI and CUDA backends
+    #: call functions of the scene's own)
+    universal_ok = True
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
-                 sort_every: int = 0) -> None:
+                 sort_every: int = 0, kernels: str | None = None) -> None:
         if force_pass not in FORCE_PASSES:
             raise ParameterError(f"CpuBackend(): force_pass={force_pass!r}; allowed: "
                                  f"{', '.join(FORCE_PASSES)}")
@@ -84,6 +95,12 @@ class CpuBackend:
                                  "integer >= 0 (0: never)")
         self.threads = threads
         self.force_pass = force_pass
+        self.kernels = warm.kernels_choice(kernels)
+        #: the step module is the universal one (its pair table: ``_universal_params``)
+        self.universal = False
+        self._universal_params: np.ndarray | None = None
+        self._form: bool | None = None
+        self._compiled = False
         #: renumber the bodies in cell order after this many list rebuilds (0: never)
         self.sort_every = sort_every
         self._rebuilds_since_sort = 0
@@ -100,6 +117,8 @@ class CpuBackend:
         module is loaded again at the next run."""
         state = self.__dict__.copy()
         state["module"] = None
+        state["_universal_params"] = None
+        state["_form"] = None
         return state
 
     # ------------------------------------------------------------------ set-up
@@ -149,8 +168,30 @@ class CpuBackend:
         plan = self.sim.plan
         want = (plan.spheres_only if self.force_pass == "auto"
                 else self.force_pass == "fused" and plan.spheres_only)
-        if self.module is None or self.module.FUSED != want:
-            self.module = plan.module(want)
+        if self.module is None or self._form != want:
+            self._form = want
+            self._compiled = False
+            if self.universal_ok:
+                self.module, self.universal = warm.choose(plan, want, self.kernels)
+            else:
+                self.module, self.universal = plan.module(want), False
+            self._universal_params = None
+            if self.universal:
+                from ..universal_step import universal_tables
+
+                self._universal_params = universal_tables(plan.laws, plan.pair_model,
+                                                          plan.pair_params)
+
+    def _after_call(self) -> None:
+        """After the first call of a step module: it is in numba's cache now (marked
+        ready); a universal one hands the scene's own module to a background compile."""
+        if self._compiled or self.module is None:
+            return
+        self._compiled = True
+        warm.mark_ready(self.module)
+        if self.universal and self.kernels == "auto" and warm.background_allowed():
+            warm.compile_in_background(self.sim.plan, self._form,
+                                       warm.signatures(self.module))
 
     def fused_chunks(self) -> int:
         """The number of chunks (one per thread) if the step sums forces as it computes
@@ -174,7 +215,9 @@ class CpuBackend:
         ctl = SceneConstants(sim.gravity, float(sim.skin), sim.max_overlap,
                              not plan.spheres_only, self.fused_chunks(),
                              plan.spheres_only and not sim.sphere_orientation,
-                             plan.pair_model, plan.pair_params, sim.period,
+                             plan.pair_model,
+                             plan.pair_params if self._universal_params is None
+                             else self._universal_params, sim.period,
                              len(b) - b.ghosts)
         bodies = BodyArrays(b.position, b.velocity, b.orientation, b.angular_velocity,
                             b.force, b.torque, b.mass, b.invmass, b.invinertia, self.vf,
@@ -268,6 +311,7 @@ class CpuBackend:
             if d[0] in (STATUS_OK, STATUS_OVERLAP):
                 ran += 1
         d[1] = ran
+        self._after_call()
         out = self._result(ran)
         if self.sort_every:
             self._rebuilds_since_sort += out.rebuilds

@@ -132,6 +132,8 @@ class CudaBackend(CpuBackend):
         launches; default: on the simulator only). Same results either way.
     """
 
+    universal_ok = False  # (its kernels call functions of the scene's own module)
+
     name = "cuda"
     #: seconds of steps the run loop aims at per call (the host state travels once per
     #: call: longer calls than the CPU's 0.1 s)

@@ -63,6 +63,8 @@ class MpiBackend(CpuBackend):
     (largest over mean step time of the ranks) above which a call's start cuts the domain
     again."""
 
+    universal_ok = False  # (its kernels call functions of the scene's own module)
+
     name = "mpi"
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
