@@ -121,6 +121,13 @@ class CpuBackend:
         state["_form"] = None
         return state
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # (checkpoints written before the universal module: its attributes at defaults)
+        self.__dict__.update({"kernels": warm.kernels_choice(None), "universal": False,
+                              "_universal_params": None, "_form": None,
+                              "_compiled": False})
+        self.__dict__.update(state)
+
     # ------------------------------------------------------------------ set-up
     def thread_count(self, n_elements: int) -> int:
         """Threads for a run of a scene of ``n_elements`` elements."""

@@ -178,7 +178,7 @@ class CudaBackend(CpuBackend):
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
+        super().__setstate__(state)
         self.cuda = cuda_module()
 
     # ------------------------------------------------------------------ host changes
