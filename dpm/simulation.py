@@ -584,7 +584,8 @@ class Simulation:
 
     def output(self, path: str, every: float | None = None,
                every_steps: int | None = None, overwrite: bool = False,
-               fields: str | tuple[str, ...] = (), contacts: bool = False) -> None:
+               fields: str | tuple[str, ...] = (), contacts: bool = False,
+               solids: bool = False) -> None:
         """Write frames to HDF5 at ``path`` (+ XDMF beside it) every ``every`` seconds or
         ``every_steps`` steps. The file is created when the next run starts, with the state
         at that moment as its first frame.
@@ -595,6 +596,10 @@ class Simulation:
         other bodies and boundaries), ``rotation`` (the rotation matrix, 9 components, for
         ParaView's tensor glyphs). ``contacts=True`` writes the touching pairs of each
         frame with their forces, drawn as lines in ``run.contacts.xdmf`` (force chains).
+        ``solids=True`` writes the solid shape of each clustered body (its ideal solid's
+        triangle surface, stored once per shape, placed at the body's pose in each frame),
+        drawn in ``run.solids.xdmf`` beside the element spheres of ``run.elements.xdmf``.
+        The scene's description (and a TOML scene file's text) is stored in every file.
         Layout: docs/output-format.md.
 
         An existing file at ``path`` is kept: this raises :class:`ParameterError` unless
@@ -633,18 +638,21 @@ class Simulation:
         if not isinstance(overwrite, bool | np.bool_):
             raise ParameterError(f"{call}: overwrite={overwrite!r}; allowed: True or False")
         chosen = check_output_fields(fields, call)
-        if not isinstance(contacts, bool | np.bool_):
-            raise ParameterError(f"{call}: contacts={contacts!r}; allowed: True or False")
+        for label, flag in (("contacts", contacts), ("solids", solids)):
+            if not isinstance(flag, bool | np.bool_):
+                raise ParameterError(f"{call}: {label}={flag!r}; allowed: True or False")
         target = os.path.realpath(name)
         w = self._writer
         appending = (w is not None and not w.closed
                      and os.path.realpath(w.path) == target)
-        if appending and (chosen != getattr(self, "_output_fields", ())
-                          or bool(contacts) != getattr(self, "_output_contacts", False)):
+        layout = (getattr(self, "_output_fields", ()),
+                  getattr(self, "_output_contacts", False),
+                  getattr(self, "_output_solids", False))
+        if appending and (chosen, bool(contacts), bool(solids)) != layout:
             raise ParameterError(f"{call}: {name!r} is being written with fields="
-                                 f"{getattr(self, '_output_fields', ())!r}, contacts="
-                                 f"{getattr(self, '_output_contacts', False)!r}; its layout "
-                                 f"is fixed: call sim.close() first or choose another path")
+                                 f"{layout[0]!r}, contacts={layout[1]!r}, solids="
+                                 f"{layout[2]!r}; its layout is fixed: call sim.close() "
+                                 f"first or choose another path")
         if not appending:
             # (MPI: rank 0 creates the file, maybe before another rank gets here)
             check_output_path(name, bool(overwrite) or not getattr(self.backend, "root",
@@ -655,6 +663,7 @@ class Simulation:
         #: the optional per-particle fields and the contact output of the file
         self._output_fields = chosen
         self._output_contacts = bool(contacts)
+        self._output_solids = bool(solids)
         self._output_every_s = every
         self._output_every = None if every is not None else int(every_steps)
         if appending:

@@ -14,6 +14,7 @@ ones fully written (:func:`load` also drops a frame whose rows are not all there
 
 from __future__ import annotations
 
+import json
 import os
 import tempfile
 import time as _time
@@ -26,6 +27,7 @@ import numpy as np
 from .._lazy import lazy_module
 from ..errors import ParameterError
 from .contacts import CONTACT_FIELDS, PARTICLE_FIELDS
+from .solids import SOLID_FRAME_FIELDS, solid_rows
 
 h5py = lazy_module("h5py")
 
@@ -198,10 +200,33 @@ def sidecars(path: str | Path) -> tuple[Path, Path]:
     return path.with_suffix(".xdmf"), path.with_suffix(".elements.xdmf")
 
 
+#: the other sidecars a run file may have (removed with a file that is replaced)
+OTHER_SIDECARS = (".boundaries.xdmf", ".contacts.xdmf", ".solids.xdmf")
+
+
+def _scene_attrs(f: Any, sim: Simulation) -> None:
+    """The scene in the file: ``scene``, the JSON description a checkpoint stores
+    (:func:`dpm.checkpoint.scene_description`), its ``scene_fingerprint``, and for a run of
+    a TOML scene file (``dpm run scene.toml``) ``scene_file`` and ``scene_toml`` (its
+    text). A stand-in of a Simulation that lacks the scene's parts stores none."""
+    from ..checkpoint import fingerprint, scene_description
+
+    try:
+        description = scene_description(sim)
+    except AttributeError:
+        return
+    f.attrs["scene"] = json.dumps(description, sort_keys=True)
+    f.attrs["scene_fingerprint"] = fingerprint(description)
+    source = getattr(sim, "_scene_source", None)
+    if source is not None:
+        f.attrs["scene_file"], f.attrs["scene_toml"] = str(source[0]), str(source[1])
+
+
 def _layout(f: Any, sim: Simulation, fields: tuple[str, ...] = (),
-            contacts: bool = False) -> None:
+            contacts: bool = False, solids: bool = False) -> None:
     """Attributes and every dataset (empty) of a new run file; ``fields``: the optional
-    per-particle fields (:data:`OUTPUT_FIELDS`), ``contacts``: the contact output."""
+    per-particle fields (:data:`OUTPUT_FIELDS`), ``contacts``: the contact output,
+    ``solids``: the solid shapes of clustered bodies (:mod:`dpm.io.solids`)."""
     from .. import __version__
 
     f.attrs["format"] = FORMAT
@@ -214,6 +239,7 @@ def _layout(f: Any, sim: Simulation, fields: tuple[str, ...] = (),
     f.attrs["boundaries"] = [b.name for b in sim.boundaries] or [""]
     f.attrs["shapes"] = list(getattr(sim, "shape_names", [])) or [""]
     f.attrs["units"] = "SI: m, s, kg, N, rad (each dataset's unit attribute)"
+    _scene_attrs(f, sim)
 
     def group(name: str, fields: dict[str, tuple[int, str]], rows: int) -> None:
         g = f.create_group(name)
@@ -239,7 +265,12 @@ def _layout(f: Any, sim: Simulation, fields: tuple[str, ...] = (),
     # sphere elements of clustered bodies (empty when every body is one sphere)
     group("elements", ELEMENT_FIELDS, min(max(len(sim.elements), 1), 65536))
     group("frames", {k: (0, d) for k, d in FRAME_FIELDS.items()}
-          | ({k: (0, d) for k, d in CONTACT_FRAME_FIELDS.items()} if contacts else {}), 1024)
+          | ({k: (0, d) for k, d in CONTACT_FRAME_FIELDS.items()} if contacts else {})
+          | ({k: (0, d) for k, d in SOLID_FRAME_FIELDS.items()} if solids else {}), 1024)
+    if solids:
+        from .solids import solids_layout
+
+        solids_layout(f, 16 * prows)
     nb = max(len(sim.boundaries), 1)
     bg = f.create_group("boundaries")
     for name in ("force", "torque"):
@@ -309,7 +340,8 @@ def complete_frames(f: Any) -> tuple[int, int, int]:
     the length of ``/frames/time``, less any trailing frame whose rows are not all written
     (a file that a killed run left behind)."""
     fr = f["frames"]
-    n = min(len(fr[k]) for k in (*FRAME_FIELDS, *CONTACT_FRAME_FIELDS) if k in fr)
+    n = min(len(fr[k]) for k in (*FRAME_FIELDS, *CONTACT_FRAME_FIELDS, *SOLID_FRAME_FIELDS)
+            if k in fr)
     if "boundaries" in f:
         n = min(n, *(len(f["boundaries"][k]) for k in f["boundaries"]))
     rows = min(len(f["particles"][k]) for k in f["particles"])
@@ -323,6 +355,10 @@ def complete_frames(f: Any) -> tuple[int, int, int]:
         ok &= fr["element_start"][:n] + fr["element_count"][:n] <= erows
     if "contact_start" in fr:
         ok &= fr["contact_start"][:n] + fr["contact_count"][:n] <= contact_rows(f)
+    if "solid_vertex_start" in fr:
+        vrows, frows = solid_rows(f)
+        ok &= fr["solid_vertex_start"][:n] + fr["solid_vertex_count"][:n] <= vrows
+        ok &= fr["solid_face_start"][:n] + fr["solid_face_count"][:n] <= frows
     if not ok.all():
         n = int(np.argmin(ok))
     if n == 0:
@@ -371,6 +407,7 @@ def _start_counts(w: Any, sim: Simulation) -> None:
     w.clusters = not (sim.plan is None or sim.plan.spheres_only)
     w.frames = w.rows = w.element_rows = w.removed = w.thermo_rows = 0
     w.contact_rows = w.line_nodes = 0
+    w.solids = None
 
 
 class Writer:
@@ -381,18 +418,21 @@ class Writer:
     ``overwrite=True``, which replaces it and removes its XDMF sidecars.
     :meth:`resume` reopens an existing run file instead, cut back to a checkpoint.
 
-    ``fields`` (optional per-particle fields, :data:`OUTPUT_FIELDS`) and ``contacts`` (the
-    touching pairs per frame): None takes what ``sim.output()`` stored. The file's layout
-    says what each frame holds, so a resumed file goes on with the same fields.
+    ``fields`` (optional per-particle fields, :data:`OUTPUT_FIELDS`), ``contacts`` (the
+    touching pairs per frame) and ``solids`` (the solid shapes of clustered bodies per
+    frame): None takes what ``sim.output()`` stored. The file's layout says what each frame
+    holds, so a resumed file goes on with the same fields.
     """
 
     def __init__(self, path: str | Path, sim: Simulation, overwrite: bool = False,
-                 fields: tuple[str, ...] | None = None, contacts: bool | None = None
-                 ) -> None:
+                 fields: tuple[str, ...] | None = None, contacts: bool | None = None,
+                 solids: bool | None = None) -> None:
         if fields is None:
             fields = tuple(getattr(sim, "_output_fields", ()))
         if contacts is None:
             contacts = bool(getattr(sim, "_output_contacts", False))
+        if solids is None:
+            solids = bool(getattr(sim, "_output_solids", False))
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         if self.path.is_dir():
@@ -402,16 +442,19 @@ class Writer:
         tmp = _temp_beside(self.path)
         try:
             with h5py.File(tmp, "w", libver="latest") as f:
-                _layout(f, sim, fields, contacts)
+                _layout(f, sim, fields, contacts, solids)
             _publish(tmp, self.path, overwrite)
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
-        for s in (*sidecars(self.path), self.path.with_suffix(".boundaries.xdmf"),
-                  self.path.with_suffix(".contacts.xdmf")):
+        for s in (*sidecars(self.path), *(self.path.with_suffix(x) for x in OTHER_SIDECARS)):
             s.unlink(missing_ok=True)  # (those of a replaced file describe other frames)
         self._open()
         _start_counts(self, sim)
+        if solids:
+            from .solids import Solids
+
+            self.solids = Solids(self.file)
 
     def _open(self) -> None:
         self.file = h5py.File(self.path, "r+", libver="latest")
@@ -468,13 +511,17 @@ class Writer:
             if max(len(sim.boundaries), 1) != nb:
                 raise ParameterError(f"{call}: the file has {nb} boundary column(s), the "
                                      f"simulation {len(sim.boundaries)} boundaries")
-            rows = erows = crows = 0
+            rows = erows = crows = vrows = frows = 0
             if frames:
                 fr, k = f["frames"], frames - 1
                 rows = int(fr["start"][k] + fr["count"][k])
                 erows = int(fr["element_start"][k] + fr["element_count"][k])
                 if "contact_start" in fr:
                     crows = int(fr["contact_start"][k] + fr["contact_count"][k])
+                if "solid_vertex_start" in fr:  # (frames may share face rows)
+                    vrows = int(fr["solid_vertex_start"][k] + fr["solid_vertex_count"][k])
+                    frows = int(np.max(fr["solid_face_start"][:frames]
+                                       + fr["solid_face_count"][:frames]))
             has_thermo = "thermo" in f
             thermo = 0
             if has_thermo and frames:
@@ -483,7 +530,7 @@ class Writer:
                                              side="right"))
             sizes = {"frames": frames, "boundaries": frames, "particles": rows,
                      "elements": erows, "removed": removed, "thermo": thermo,
-                     "contacts": crows}
+                     "contacts": crows, "solids": frows, "solids/vertices": vrows}
             if not rebuild:
                 _truncate(f, sizes)
         finally:
@@ -501,6 +548,12 @@ class Writer:
         w.thermo_rows = thermo
         w.contact_rows = crows
         w.line_nodes = len(w.file["contacts/line_nodes"]) if "contacts" in w.file else 0
+        w.solids = None
+        if "solids" in w.file:
+            from .solids import Solids
+
+            w.solids = Solids(w.file)
+            w.solids.resume(vrows, frows)
         w.write_xdmf()
         return w
 
@@ -558,6 +611,10 @@ class Writer:
         if "contacts" in self.file:
             nc = self._write_contacts(sim)
             columns += [("contact_start", self.contact_rows), ("contact_count", nc)]
+        if self.solids is not None:
+            s = self.solids
+            placed = (s.write(sim) if self.clusters else (s.vertex_rows, 0, s.face_rows, 0))
+            columns += list(zip(SOLID_FRAME_FIELDS, placed, strict=True))
         for name, value in columns:
             fr[name].resize(self.frames + 1, axis=0)
             fr[name][self.frames] = value
@@ -676,6 +733,12 @@ class Writer:
 
             write_contacts_xdmf(self.path, fr["time"][:k], fr["contact_start"][:k],
                                 fr["contact_count"][:k], self.contact_rows, self.line_nodes)
+        if self.solids is not None:
+            from .xdmf import write_solids_xdmf
+
+            write_solids_xdmf(self.path, *(fr[c][:k] for c in (("time",)
+                                                               + tuple(SOLID_FRAME_FIELDS))),
+                              self.solids.vertex_rows, self.solids.face_rows)
 
     @property
     def closed(self) -> bool:
@@ -731,14 +794,15 @@ def _truncate(f: Any, sizes: dict[str, int]) -> None:
     """Cut every dataset of the groups in ``sizes`` to that many rows, in place: the frame
     count (``/frames/time``) and removal count (``/removed/id``) first."""
     for group in ("frames", "removed", "thermo", "boundaries", "particles", "elements",
-                  "contacts"):
+                  "contacts", "solids"):
         if group not in f:
             continue
         g = f[group]
         names = sorted(g, key=lambda k: k not in ("time", "id") or group == "particles")
         for name in names:
-            if name not in _UNCUT and g[name].shape[0] > sizes[group]:
-                g[name].resize(sizes[group], axis=0)
+            size = sizes.get(f"{group}/{name}", sizes[group])
+            if name not in _UNCUT and g[name].shape[0] > size:
+                g[name].resize(size, axis=0)
     f.flush()
 
 
@@ -755,7 +819,8 @@ def _rebuild(path: Path, sizes: dict[str, int]) -> None:
                 for name, ds in g.items():
                     rows = ds.shape[0]
                     if name not in _UNCUT:
-                        rows = min(rows, sizes.get(gname, rows))
+                        rows = min(rows, sizes.get(f"{gname}/{name}",
+                                                   sizes.get(gname, rows)))
                     new = out.create_dataset(name, shape=(rows,) + ds.shape[1:],
                                              # (a contiguous dataset stays contiguous)
                                              maxshape=ds.maxshape if ds.chunks else None,
@@ -788,6 +853,7 @@ class Run:
             self.attrs: dict[str, Any] = dict(f.attrs)
             n, self._rows, self._element_rows = complete_frames(f)
             self._contacts = "contacts" in f
+            self._solids = "solids" in f
             self.times = f["frames/time"][:n]
             self.steps = f["frames/step"][:n]
             self.start = f["frames/start"][:n]
@@ -855,6 +921,68 @@ class Run:
             a, n = int(fr["contact_start"][k]), int(fr["contact_count"][k])
             return {name: f["contacts"][name][a:a + n] for name in CONTACT_FIELDS}
 
+    def solids(self, k: int) -> dict[str, np.ndarray]:
+        """The solid shapes of the clustered bodies of frame k (a file written with
+        ``solids=True``): ``vertices`` (W, 3) world positions, ``faces`` (U, 3) triangles
+        (rows of ``vertices``), ``body_id`` and ``shape`` (U,) of each triangle. Raises
+        KeyError for a file without solids."""
+        k = self._index(k)
+        with _open(self.path) as f:
+            if "solids" not in f:
+                raise KeyError(f"{self.path} has no solids (sim.output(..., solids=True) "
+                               f"writes them)")
+            fr, g = f["frames"], f["solids"]
+            a, n = int(fr["solid_vertex_start"][k]), int(fr["solid_vertex_count"][k])
+            b, m = int(fr["solid_face_start"][k]), int(fr["solid_face_count"][k])
+            out = {"vertices": g["vertices"][a:a + n]}
+            out.update({name: g[name][b:b + m] for name in ("faces", "body_id", "shape")})
+            return out
+
+    @property
+    def solid_shapes(self) -> list[dict[str, Any]]:
+        """The meshes of the clustered shapes of a file with solids (empty otherwise): per
+        mesh ``name``, ``description``, ``shape`` (its index in the frames' ``shape``
+        field; a shape added after the file was created is past the end of
+        ``attrs["shapes"]``), ``volume`` (the ideal solid's),
+        ``mesh_volume`` (what the mesh encloses; NaN when it is not closed), ``vertices``
+        (V, 3) in the body's principal frame and ``faces`` (T, 3)."""
+        from .solids import MESH_FIELDS
+
+        with _open(self.path) as f:
+            if "solid_shapes" not in f:
+                return []
+            g = f["solid_shapes"]
+            n = min(len(g[k]) for k in MESH_FIELDS)
+            out = []
+            for k in range(n):
+                a, v = int(g["vertex_start"][k]), int(g["vertex_count"][k])
+                b, t = int(g["face_start"][k]), int(g["face_count"][k])
+                out.append({"name": g["name"][k].decode(),
+                            "description": g["description"][k].decode(),
+                            "shape": int(g["shape"][k]), "volume": float(g["volume"][k]),
+                            "mesh_volume": float(g["mesh_volume"][k]),
+                            "vertices": g["vertices"][a:a + v], "faces": g["faces"][b:b + t]})
+            return out
+
+    @property
+    def scene(self) -> dict[str, Any] | None:
+        """The scene's description stored at the file's creation (the one a checkpoint
+        stores: materials, contact laws, boundaries, inlets, outlets, ...); None for a
+        file written before dpm stored it."""
+        text = _text(self.attrs.get("scene"))
+        return None if text is None else json.loads(text)
+
+    @property
+    def scene_toml(self) -> str | None:
+        """The text of the TOML scene file of the run (``dpm run scene.toml``); None for a
+        scene built in Python or a file written before dpm stored it."""
+        return _text(self.attrs.get("scene_toml"))
+
+    @property
+    def scene_file(self) -> str | None:
+        """The path of the TOML scene file the run came from (None: see :attr:`scene_toml`)."""
+        return _text(self.attrs.get("scene_file"))
+
     def field(self, name: str) -> list[np.ndarray]:
         """One per-particle field over all frames (a list of arrays)."""
         with _open(self.path) as f:
@@ -868,6 +996,13 @@ class Run:
     def write_xdmf(self) -> Path:
         """Rewrite the XDMF sidecar(s) beside the file; returns the particles' one."""
         return write_xdmf(self.path)
+
+
+def _text(value: Any) -> str | None:
+    """An HDF5 string attribute as str (None when absent)."""
+    if value is None:
+        return None
+    return value.decode() if isinstance(value, bytes) else str(value)
 
 
 def _open(path: Path) -> h5py.File:
@@ -896,9 +1031,10 @@ def check_xdmf(run: Run) -> None:
     frames than the HDF5 file has (a killed run, or a file cut back by a resume)."""
     particles, elements = sidecars(run.path)
     contacts = run.path.with_suffix(".contacts.xdmf")
+    solids = run.path.with_suffix(".solids.xdmf")
     stale = []
     for side, needed in ((particles, True), (elements, run._element_rows > 0),
-                         (contacts, run._contacts)):
+                         (contacts, run._contacts), (solids, run._solids)):
         if not needed:
             continue
         listed = _xdmf_frames(side)
@@ -912,7 +1048,8 @@ def check_xdmf(run: Run) -> None:
     writable = (os.access(run.path, os.W_OK) and os.access(run.path.parent, os.W_OK)
                 and all(not s.exists() or os.access(s, os.W_OK) for s in (particles,
                                                                             elements,
-                                                                            contacts)))
+                                                                            contacts,
+                                                                            solids)))
     if not writable:
         warnings.warn(f"{what}; the file is read-only, the sidecar is not rewritten",
                       stacklevel=3)

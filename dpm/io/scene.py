@@ -123,6 +123,8 @@ def load_scene(path: str | Path, output: bool = True,
     if "simulation" not in doc:
         raise ParameterError(f"{path}: the [simulation] table (with dt) is required")
     sim = Simulation(**doc["simulation"])
+    # the scene file's text goes into the output file (run.scene_toml)
+    sim._scene_source = (str(path), path.read_text(encoding="utf-8"))
     mats: dict[str, Material] = {}
     for name, kw in doc.get("materials", {}).items():
         mats[name] = Material(name, **kw)

@@ -2,7 +2,9 @@
 ``run.elements.xdmf`` (the sphere elements of clustered bodies),
 ``run.boundaries.xdmf`` (every boundary's surface as triangles, moving with it) and
 ``run.contacts.xdmf`` (the touching pairs as lines between the body centres, with their
-forces as cell attributes; written with ``sim.output(..., contacts=True)``).
+forces as cell attributes; written with ``sim.output(..., contacts=True)``) and
+``run.solids.xdmf`` (the solid shapes of clustered bodies as triangles, with the body id
+and shape of each as cell attributes; written with ``sim.output(..., solids=True)``).
 
 Read by ParaView's Xdmf3 reader and by VTK's ``vtkXdmfReader`` (the tests read every value
 back with the latter).
@@ -152,6 +154,39 @@ def write_contacts_xdmf(h5path: Path, times, starts, counts, rows: int,
     return _publish_text(h5path.with_suffix(".contacts.xdmf"), out)
 
 
+def write_solids_xdmf(h5path: Path, times, vstarts, vcounts, fstarts, fcounts,
+                      vrows: int, frows: int) -> Path:
+    """Write ``<run>.solids.xdmf``: per frame the triangles of ``/solids/faces`` (rows
+    ``solid_face_start`` on, shared by frames with the same bodies) on that frame's
+    vertices of ``/solids/vertices``, with ``body_id`` and ``shape`` as cell attributes."""
+    h5path = Path(h5path)
+    name = h5path.name
+    out = ['<?xml version="1.0" ?>', '<Xdmf Version="3.0"><Domain>',
+           '<Grid Name="solids" GridType="Collection" CollectionType="Temporal">']
+    for t, a, n, b, m in zip(times, vstarts, vcounts, fstarts, fcounts, strict=True):
+        a, n, b, m = int(a), int(n), int(b), int(m)
+        if n == 0 or m == 0:  # (no clustered body: one point, no cell; a zero-size
+            # hyperslab makes the XDMF library print allocation errors)
+            out.append(f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
+                       f'<Topology TopologyType="Polyvertex" NumberOfElements="0"/>'
+                       f'<Geometry GeometryType="XYZ"><DataItem Dimensions="1 3" '
+                       f'NumberType="Float" Precision="8" Format="XML">0 0 0</DataItem>'
+                       f'</Geometry></Grid>')
+            continue
+        out.append(
+            f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
+            f'<Topology TopologyType="Triangle" NumberOfElements="{m}">'
+            f'{_slab(name, "faces", b, m, 3, frows, "Int", 8, "solids")}</Topology>'
+            f'<Geometry GeometryType="XYZ">'
+            f'{_slab(name, "vertices", a, n, 3, vrows, "Float", 8, "solids")}</Geometry>')
+        for field, ntype, prec in (("body_id", "Int", 8), ("shape", "Int", 4)):
+            out.append(_attribute(field, 0, "Cell",
+                                  _slab(name, field, b, m, 0, frows, ntype, prec, "solids")))
+        out.append("</Grid>")
+    out.append("</Grid></Domain></Xdmf>")
+    return _publish_text(h5path.with_suffix(".solids.xdmf"), out)
+
+
 def _publish_text(path: Path, out: list[str]) -> Path:
     """Write the lines ``out`` to ``path`` atomically: a kill never leaves a half-written
     sidecar (a unique temporary name, so two processes rewriting the same sidecar do not
@@ -172,6 +207,7 @@ def write_xdmf(h5path: str | Path) -> Path:
     """(Re)write the XDMF sidecar(s) of an existing dpm HDF5 run for its complete frames;
     returns the path of ``run.xdmf``."""
     from .hdf5 import complete_frames, contact_rows
+    from .solids import SOLID_FRAME_FIELDS, solid_rows
 
     with h5py.File(h5path, "r", libver="latest", swmr=True) as f:
         n, _, erows = complete_frames(f)
@@ -187,6 +223,10 @@ def write_xdmf(h5path: str | Path) -> Path:
             write_contacts_xdmf(Path(h5path), fr["time"][:n], fr["contact_start"][:n],
                                 fr["contact_count"][:n], contact_rows(f),
                                 len(f["contacts/line_nodes"]))
+        if "solids" in f:
+            fr = f["frames"]
+            write_solids_xdmf(Path(h5path), fr["time"][:n],
+                              *(fr[c][:n] for c in SOLID_FRAME_FIELDS), *solid_rows(f))
         return write_xdmf_from_arrays(Path(h5path), f["frames/time"][:n], f["frames/start"][:n],
                                       f["frames/count"][:n], len(f["particles/id"]),
                                       fields=set(f["particles"]))

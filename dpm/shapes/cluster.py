@@ -37,8 +37,10 @@ be smaller than ``r_min``.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import time
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -69,6 +71,9 @@ MAX_ELEMENTS = 20_000
 WALK_STEPS = 48
 #: voxel budget of the coarse grid that finds the deepest point
 COARSE_VOXELS = 40_000
+#: clustered shapes remembered by :func:`built_shape` (the most recently built)
+BUILT_MAX = 256
+_BUILT: OrderedDict[str, ClusterShape] = OrderedDict()
 
 RESOLUTION = Parameter(
     default=0.3, low=0.0, high=1.0, low_open=True,
@@ -244,7 +249,7 @@ class ClusterShape(Shape):
         off = self.principal_offsets()
         m = len(cl.radii)
         bound = float(np.max(np.linalg.norm(off, axis=1) + cl.radii))
-        return BodyBatch(
+        batch = BodyBatch(
             mass=np.full(count, density * mp.volume),
             inertia=np.tile(density * mp.moments, (count, 1)),
             element_count=np.full(count, m, dtype=np.int64),
@@ -252,6 +257,8 @@ class ClusterShape(Shape):
             element_radius=np.tile(cl.radii, count),
             bounding_radius=np.full(count, bound),
             principal_rotation=np.tile(mp.quaternion, (count, 1)))
+        remember(self, off, cl.radii)
+        return batch
 
     def describe(self, resolution: bool = True) -> str:
         """``name(p=v, ...)`` with the shape's parameters."""
@@ -259,6 +266,32 @@ class ClusterShape(Shape):
         args = ", ".join(f"{k}={_fmt_param(v)}" for k, v in self.params.items()
                          if v is not None and k not in skip)
         return f"{self.name}({args})"
+
+
+def element_key(offsets: np.ndarray, radii: np.ndarray) -> str:
+    """A digest of one body's elements (offsets in the principal frame, radii): equal for
+    the bodies of one shape, as the state holds them (the arrays :meth:`ClusterShape.build`
+    gives, copied bit for bit)."""
+    h = hashlib.sha256(np.ascontiguousarray(offsets, dtype=np.float64).tobytes())
+    h.update(np.ascontiguousarray(radii, dtype=np.float64).tobytes())
+    return h.hexdigest()[:32]
+
+
+def remember(shape: ClusterShape, offsets: np.ndarray, radii: np.ndarray) -> None:
+    """Remember ``shape`` under the digest of its elements (:func:`element_key`), so that
+    the output finds the ideal solid of a body from its elements (``sim.output(...,
+    solids=True)``, :mod:`dpm.io.solids`); the :data:`BUILT_MAX` most recent are kept."""
+    key = element_key(offsets, radii)
+    _BUILT[key] = shape
+    _BUILT.move_to_end(key)
+    while len(_BUILT) > BUILT_MAX:
+        _BUILT.popitem(last=False)
+
+
+def built_shape(key: str) -> ClusterShape | None:
+    """The clustered shape built in this process whose elements have the digest ``key``
+    (None when none is remembered)."""
+    return _BUILT.get(key)
 
 
 def _fmt_param(v: Any) -> str:
