@@ -272,7 +272,8 @@ def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
                                 f"({base / p['csv']})")
     if "output" in doc:
         problems += _unknown("[output]", doc["output"],
-                             ["path", "every", "every_steps", "overwrite"])
+                             ["path", "every", "every_steps", "overwrite", "fields",
+                              "contacts", "solids"])
     if "run" in doc:
         problems += _unknown("[run]", doc["run"], ["steps", "until"])
     return problems

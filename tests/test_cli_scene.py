@@ -87,6 +87,24 @@ def test_example_scene_file_runs(tmp_path, monkeypatch):
     assert dpm.load(tmp_path / "box_settle_toml.h5").n_frames == 1
 
 
+def test_scene_file_output_options(tmp_path, monkeypatch):
+    """[output] takes sim.output's optional fields, contacts and solids; a bad field
+    name is refused with its name before any step."""
+    monkeypatch.chdir(tmp_path)
+    text = (EXAMPLES / "box_settle.toml").read_text().replace(
+        'every = 0.01', 'every_steps = 10\nfields = ["force", "contact_count"]\n'
+        'contacts = true\nsolids = false')
+    (tmp_path / "s.toml").write_text(text)
+    assert main(["run", "s.toml", "--steps", "20", "--no-progress"]) == 0
+    run = dpm.load(tmp_path / "box_settle_toml.h5")
+    frame = run.frame(-1)
+    assert frame["force"].shape == (1000, 3) and frame["contact_count"].shape == (1000,)
+    assert "normal_force" in run.contacts(-1)
+    (tmp_path / "bad.toml").write_text(text.replace('"contact_count"', '"contacts"'))
+    with pytest.raises(dpm.ParameterError, match="fields"):
+        load_scene(tmp_path / "bad.toml", overwrite=True)
+
+
 FLOW_SCENE = """
 [simulation]
 dt = 1e-5

@@ -54,6 +54,7 @@ Layout (every table mirrors a call; keys are the call's keyword arguments)::
     [output]                     # sim.output(...)
     path = "run.h5"              # relative to the working directory
     every = 0.01
+    # fields = ["force", "contact_count"]   # or "all"; contacts = true; solids = true
 
     [run]                        # sim.run(...)
     until = 0.2
