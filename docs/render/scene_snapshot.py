@@ -12,7 +12,13 @@ of ``<run>.boundaries.xdmf`` at the same time, rendered offscreen.
 ``--view`` looks along an axis (``-y``: from y < 0 towards +y) or from an oblique corner
 (``iso``); the camera frames the boundaries (a particle thrown far out may leave the picture);
 ``--cut AXIS`` leaves out the boundary faces whose normal lies along AXIS (the
-drum's end caps) so that the bed inside shows.
+drum's end caps) so that the bed inside shows. ``--solids`` draws the clustered bodies
+as their solid shapes from ``<run>.solids.xdmf`` (written with
+``sim.output(..., solids=True)``) instead of their bounding spheres:
+
+    python docs/render/solids_run.py /tmp/solids.h5
+    python docs/render/scene_snapshot.py /tmp/solids.xdmf docs/images/solids_drum.png \
+        --view=-y --cut y --solids
 """
 
 from __future__ import annotations
@@ -49,6 +55,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--cut", default="", help="axis whose facing boundary faces are hidden")
     ap.add_argument("--size", type=int, nargs=2, default=(800, 600))
     ap.add_argument("--title", default="")
+    ap.add_argument("--solids", action="store_true", help="clustered bodies as their solid "
+                    "shapes (<run>.solids.xdmf)")
     args = ap.parse_args(argv)
 
     t, grid = read_last(args.xdmf)
@@ -58,6 +66,16 @@ def main(argv: list[str] | None = None) -> None:
     speed = np.linalg.norm(vtk_to_numpy(pd.GetArray("velocity")), axis=1)
     hi = float(np.percentile(speed, 98)) or 1.0
     actors = [spheres_actor(pos, radius, speed, (0.0, hi))]
+    if args.solids:
+        _, solid = read_last(args.xdmf.with_name(args.xdmf.stem + ".solids.xdmf"))
+        geo = vtkGeometryFilter()
+        geo.SetInputData(solid)
+        geo.Update()
+        mesh = geo.GetOutput()
+        actors = [surface_actor(polydata(
+            vtk_to_numpy(mesh.GetPoints().GetData()),
+            vtk_to_numpy(mesh.GetPolys().GetConnectivityArray()).reshape(-1, 3)),
+            color=(0.85, 0.55, 0.3))]
 
     bounds = None
     side = args.xdmf.with_name(args.xdmf.stem + ".boundaries.xdmf")
