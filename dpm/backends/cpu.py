@@ -95,7 +95,7 @@ class CpuBackend:
                                  "integer >= 0 (0: never)")
         self.threads = threads
         self.force_pass = force_pass
-        self.kernels = warm.kernels_choice(kernels)
+        self.kernel_choice = warm.kernels_choice(kernels)
         #: the step module is the universal one (its pair table: ``_universal_params``)
         self.universal = False
         self._universal_params: np.ndarray | None = None
@@ -123,7 +123,7 @@ class CpuBackend:
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         # (checkpoints written before the universal module: its attributes at defaults)
-        self.__dict__.update({"kernels": warm.kernels_choice(None), "universal": False,
+        self.__dict__.update({"kernel_choice": warm.kernels_choice(None), "universal": False,
                               "_universal_params": None, "_form": None,
                               "_compiled": False})
         self.__dict__.update(state)
@@ -179,7 +179,7 @@ class CpuBackend:
             self._form = want
             self._compiled = False
             if self.universal_ok:
-                self.module, self.universal = warm.choose(plan, want, self.kernels)
+                self.module, self.universal = warm.choose(plan, want, self.kernel_choice)
             else:
                 self.module, self.universal = plan.module(want), False
             self._universal_params = None
@@ -196,7 +196,7 @@ class CpuBackend:
             return
         self._compiled = True
         warm.mark_ready(self.module)
-        if self.universal and self.kernels == "auto" and warm.background_allowed():
+        if self.universal and self.kernel_choice == "auto" and warm.background_allowed():
             warm.compile_in_background(self.sim.plan, self._form,
                                        warm.signatures(self.module))
 
