@@ -675,6 +675,9 @@ def test_epsd_lets_a_heap_come_to_rest():
     ke0, spread0, z0 = pour_heap("constant_torque", 0.0, 0.3)
     ke2, spread2, z2 = pour_heap("epsd", 0.2, 1.0)
     assert z0 < 1.1 * R and spread0 > 4 * spread2       # flat, spread out, still rolling
-    assert ke0[-1] > 0.3 * ke0[0]
+    # (the monolayer's collisions dissipate: 0.29 of its start energy is left at the end
+    # since sliding no longer takes energy from the tangential dashpot, #21; above 0.3
+    # before. Against the heap's fall by orders of magnitude the contrast is >= 10x.)
+    assert ke0[-1] > 0.15 * ke0[0]
     assert z2 > 5 * R                                   # a heap
     assert ke2[-1] < 3e-2 * max(ke2[1:])                # that comes to rest
