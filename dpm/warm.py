@@ -100,11 +100,10 @@ def choose(plan: Any, fused: bool, kernels: str) -> tuple[ModuleType, bool]:
         return _load_module(own, "this scene's"), False
     uni = universal_step.universal_module(plan.integrator_module)
     if is_ready(uni):
-        if not _quiet() and uni.__name__ not in _ANNOUNCED:
-            _ANNOUNCED.add(uni.__name__)
-            print("dpm: this scene runs on the universal step kernels (compiled ahead); its "
-                  "own, faster ones compile in the background for the next run.",
-                  file=sys.stderr, flush=True)
+        later = (" its own, faster ones compile in the background for the next run."
+                 if background_allowed() else "")
+        _announce(uni, "this scene runs on the universal step kernels (compiled ahead);"
+                  + later)
         return uni, True
     return _load_module(own, "this scene's"), False
 
@@ -119,15 +118,20 @@ _ANNOUNCED: set[str] = set()
 
 
 def _load_module(module: ModuleType, what: str) -> ModuleType:
-    """Say on standard error, once per module and process, that a module not compiled
-    before will compile at the first step."""
-    if not is_ready(module) and module.__name__ not in _ANNOUNCED and _quiet() is False:
-        _ANNOUNCED.add(module.__name__)
-        print(f"dpm: compiling {what} step kernels (first run of this combination of "
-              "contact laws, integrator and boundaries; about a minute, then cached). "
-              "`dpm compile` once makes new scenes of built-in parts start in seconds.",
-              file=sys.stderr, flush=True)
+    """``module``, saying (once) that it compiles at the first step if it was not
+    compiled before."""
+    if not is_ready(module):
+        _announce(module, f"compiling {what} step kernels (first run of this combination of "
+                  "contact laws, integrator and boundaries; about a minute, then cached). "
+                  "`dpm compile` once makes new scenes of built-in parts start in seconds.")
     return module
+
+
+def _announce(module: ModuleType, text: str) -> None:
+    """``text`` on standard error, once per module and process (not with $DPM_QUIET)."""
+    if module.__name__ not in _ANNOUNCED and not _quiet():
+        _ANNOUNCED.add(module.__name__)
+        print(f"dpm: {text}", file=sys.stderr, flush=True)
 
 
 def _quiet() -> bool:
