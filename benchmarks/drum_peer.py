@@ -1,0 +1,549 @@
+"""A rotating drum, dpm against LIGGGHTS' ``fix move/mesh`` on the same scene in one run.
+
+A drum of radius 20 mm (axis y, horizontal, through the origin; depth 44 mm, ``--quick``
+12 mm) half filled with glass beads of r = 1 mm (2500 kg/m3, E = 5 MPa, nu = 0.3) turns at
+a fixed speed from t = 0 (Froude number omega^2 R / g = 0.04: 42 rpm, the rolling regime).
+Hertz-Mindlin, no rolling resistance: beads e = 0.5, mu = 0.5; beads on the steel drum
+(E = 20 MPa, nu = 0.3) e = 0.5, mu = 0.8; dt = 2e-5 s, skin 0.4 mm (0.2 d, both codes).
+
+The drum, three ways:
+
+- LIGGGHTS 3.8: an ASCII STL (the barrel as a 96-gon of the circle's area, rings about
+  1.3 x 2 mm; both end caps as Delaunay triangulations of ~2 mm), ``fix mesh/surface`` +
+  ``fix wall/gran model hertz tangential history mesh`` + ``fix move/mesh ... rotate origin
+  0 0 0 axis 0 1 0 period T`` (``benchmarks/scenes/drum/drum.liggghts``);
+- dpm, the same STL as a ``mesh`` boundary moved by ``dpm.Rotation``;
+- dpm, the analytic ``tube`` (``caps="both"``) moved by the same rotation (LIGGGHTS has
+  no rotating analytic cylinder: its ``primitive`` walls do not take ``move/mesh``).
+
+The same starts: the beads on a jittered lattice in the lower part of the drum with small
+random velocities, generated here for two seeds; LIGGGHTS reads them from a data file
+(``read_data``, with a Velocities section). LIGGGHTS runs from both starts (its
+run-to-run spread), dpm's mesh and tube from both starts too (start A on one thread, start
+B on two: the results do not depend on the thread count, bit for bit, so the second start
+also times two threads). The runs go in turn (LIGGGHTS A, dpm mesh A, dpm tube A,
+LIGGGHTS B, ...) so that a change of load on a shared machine falls on both codes.
+
+Compared, every 0.05 s from the same positions, velocities and spins (LIGGGHTS' dump,
+dpm's state): the dynamic angle of repose (``dpm.analysis.drum_surface``, ``method=
+"fraction"``: the bed's surface in 10 columns over the middle 70 % of the diameter, a line
+fitted through them), the bed's centre of mass in the cross-section (x: horizontal,
+positive where the bed is lifted; z: height above the axis) and the mean kinetic energy
+per bead (translational and rotational). Means over the steady window (after 0.56
+revolution of spin-up in which the bed settles and is lifted; the window is 0.85
+revolution) are compared, dpm against the LIGGGHTS runs' range.
+
+Speed: particle-steps per second of each phase (spin-up; steady window), dpm on 1 thread
+and 2 threads (``DPM_THREADS`` and ``sim.threads``, the scene's own step module,
+``DPM_KERNELS=scene``, after a warm-up run in the same process that compiles or loads it),
+LIGGGHTS on one core ("Loop time" of each ``run``); peak resident memory (ru_maxrss) of
+each process.
+
+    python benchmarks/drum_peer.py [--quick] [--no-liggghts]
+
+Writes benchmarks/results/drum_peer[_quick].json and .png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+RESULTS = HERE / "results"
+TEMPLATE = HERE / "scenes" / "drum" / "drum.liggghts"
+
+R_DRUM, R_BEAD, DENSITY = 0.02, 1e-3, 2500.0
+E_BEAD, NU_BEAD, E_WALL, NU_WALL = 5e6, 0.3, 2e7, 0.3
+E_PP, E_PW, MU_PP, MU_PW = 0.5, 0.5, 0.5, 0.8
+FROUDE = 0.04
+OMEGA = math.sqrt(FROUDE * 9.81 / R_DRUM)  # [rad/s]
+PERIOD = 2 * math.pi / OMEGA
+DT, SKIN = 2e-5, 4e-4
+#: barrel polygon sides, cap mesh spacing [m]
+N_THETA, CAP_SPACING = 96, 2e-3
+#: bulk solid fraction of the settled bed, filled fraction of the cross-section
+PACKING, FILL = 0.6, 0.5
+#: sampling interval [s]; warm-up steps of dpm (boundary moved 0.9 mm: a rebuild or more)
+SAMPLE, WARMUP = 0.05, 500
+STARTS = (1, 2)
+SIZES = {"full": {"length": 0.044, "spin": 0.5, "window": 0.7},
+         "quick": {"length": 0.012, "spin": 0.4, "window": 0.4}}
+#: the surface fit (drum_surface)
+SURFACE = {"bins": 10, "span": 0.7, "method": "fraction"}
+
+
+def steps_of(seconds: float) -> int:
+    return int(round(seconds / DT))
+
+
+def config(size: str) -> dict:
+    s = SIZES[size]
+    sample = steps_of(SAMPLE)
+    return {"size": size, "length": s["length"],
+            "spin_steps": int(round(s["spin"] / SAMPLE)) * sample,
+            "window_steps": int(round(s["window"] / SAMPLE)) * sample,
+            "sample_steps": sample}
+
+
+# ---------------------------------------------------------------- geometry and starts
+
+def drum_triangles(length: float) -> np.ndarray:
+    """Triangles (k, 3, 3) of the closed drum: the barrel (a N_THETA-gon with the circle's
+    area, split into rings about as long as a side and a half) and both caps (Delaunay
+    triangulations of the polygon's corners and a hexagonal grid inside)."""
+    from scipy.spatial import Delaunay
+
+    rv = R_DRUM * math.sqrt(2 * math.pi / (N_THETA * math.sin(2 * math.pi / N_THETA)))
+    th = np.arange(N_THETA) * 2 * math.pi / N_THETA
+    ring = np.c_[rv * np.cos(th), rv * np.sin(th)]  # (x, z)
+    side = 2 * rv * math.sin(math.pi / N_THETA)
+    ny = max(1, int(round(length / (1.5 * side))))
+    ys = np.linspace(0.0, length, ny + 1)
+    tris = []
+    for a, b in zip(ys[:-1], ys[1:], strict=True):
+        for k in range(N_THETA):
+            p, q = ring[k], ring[(k + 1) % N_THETA]
+            p0, q0, p1, q1 = ([p[0], a, p[1]], [q[0], a, q[1]], [p[0], b, p[1]],
+                              [q[0], b, q[1]])
+            tris += [(p0, q0, q1), (p0, q1, p1)]
+    # a cap: the polygon's corners and a hexagonal grid at least half a spacing inside
+    h = CAP_SPACING
+    gx, gz = np.meshgrid(np.arange(-R_DRUM, R_DRUM + h, h),
+                         np.arange(-R_DRUM, R_DRUM + h, h * math.sqrt(3) / 2))
+    gx = gx + (np.arange(gx.shape[0])[:, None] % 2) * h / 2
+    grid = np.c_[gx.ravel(), gz.ravel()]
+    grid = grid[np.hypot(grid[:, 0], grid[:, 1]) < rv * math.cos(math.pi / N_THETA) - h / 2]
+    pts = np.vstack([ring, grid])
+    for f in Delaunay(pts).simplices:
+        for y in (0.0, length):
+            tris.append(tuple([pts[i][0], y, pts[i][1]] for i in f))
+    tris = np.array(tris, float)
+    # normals inwards, to the beads (dpm: a closed mesh with inward normals is a container)
+    c = tris.mean(axis=1)
+    n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    out = c - np.array([0.0, 0.5 * length, 0.0])
+    out[np.abs(c[:, 1] - 0.5 * length) < 0.5 * length - 1e-12, 1] = 0.0  # barrel: radial
+    flip = np.einsum("ij,ij->i", n, out) > 0
+    tris[flip] = tris[flip][:, ::-1]
+    return tris
+
+
+def write_stl(path: Path, tris: np.ndarray) -> None:
+    """ASCII STL (LIGGGHTS reads ASCII STL)."""
+    lines = ["solid drum"]
+    for t in tris:
+        n = np.cross(t[1] - t[0], t[2] - t[0])
+        n /= np.linalg.norm(n)
+        lines.append(f"facet normal {n[0]:.6g} {n[1]:.6g} {n[2]:.6g}\nouter loop")
+        lines += [f"vertex {p[0]:.9g} {p[1]:.9g} {p[2]:.9g}" for p in t]
+        lines.append("endloop\nendfacet")
+    lines.append("endsolid drum")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def bead_count(length: float) -> int:
+    return int(FILL * PACKING * math.pi * R_DRUM**2 * length / (4 / 3 * math.pi * R_BEAD**3))
+
+
+def start(length: float, seed: int) -> dict:
+    """The lowest lattice sites (spacing 2.1 r, jittered by 0.02 r) inside the drum, one
+    bead each, with velocities of 0.01 m/s rms: the start of seed ``seed``."""
+    rng = np.random.default_rng(seed)
+    a = 2.1 * R_BEAD
+    xs = np.arange(-R_DRUM + a / 2, R_DRUM, a)
+    ny = int((length - 2.1 * R_BEAD) / a) + 1
+    ys = 0.5 * length + (np.arange(ny) - 0.5 * (ny - 1)) * a
+    g = np.stack(np.meshgrid(xs, ys, xs, indexing="ij"), -1).reshape(-1, 3)
+    g = g[np.hypot(g[:, 0], g[:, 2]) < R_DRUM - 1.3 * R_BEAD]
+    n = bead_count(length)
+    if len(g) < n:
+        raise ValueError(f"{len(g)} lattice sites for {n} beads")
+    g = g[np.lexsort((g[:, 0], g[:, 1], g[:, 2]))][:n]
+    pos = g + rng.uniform(-0.01, 0.01, g.shape) * R_BEAD
+    vel = rng.normal(0.0, 0.01 / math.sqrt(3), g.shape)
+    return {"position": pos, "velocity": vel, "seed": seed}
+
+
+def write_data(path: Path, st: dict, length: float) -> None:
+    """LIGGGHTS data file (atom_style granular: id type diameter density x y z) with a
+    Velocities section (id vx vy vz wx wy wz)."""
+    pos, vel = st["position"], st["velocity"]
+    b = R_DRUM * 1.2
+    rows = [f"drum start seed {st['seed']}", "", f"{len(pos)} atoms", "2 atom types", "",
+            f"{-b} {b} xlo xhi", f"{-0.2 * length} {1.2 * length} ylo yhi", f"{-b} {b} zlo zhi",
+            "", "Atoms", ""]
+    rows += [f"{i} 1 {2 * R_BEAD:.9g} {DENSITY:.9g} {p[0]:.12g} {p[1]:.12g} {p[2]:.12g}"
+             for i, p in enumerate(pos, 1)]
+    rows += ["", "Velocities", ""]
+    rows += [f"{i} {v[0]:.12g} {v[1]:.12g} {v[2]:.12g} 0 0 0" for i, v in enumerate(vel, 1)]
+    path.write_text("\n".join(rows) + "\n")
+
+
+# ---------------------------------------------------------------- the measures
+
+def measures(pos: np.ndarray, vel: np.ndarray, spin: np.ndarray, length: float) -> dict:
+    """Angle of repose [deg] (drum_surface), centre of mass [m] (x, z; x positive on the
+    lifted side, -x for the rotation about +y) and mean kinetic energy per bead [J]."""
+    from dpm.analysis import drum_surface
+
+    surf = drum_surface({"position": pos, "radius": R_BEAD}, (0.0, 0.5 * length, 0.0),
+                        (0.0, 1.0, 0.0), R_DRUM, **SURFACE)
+    m = DENSITY * 4 / 3 * math.pi * R_BEAD**3
+    inertia = 0.4 * m * R_BEAD**2
+    return {"angle_deg": surf.angle, "surface_residual_m": surf.residual,
+            "com_x_m": float(-pos[:, 0].mean()), "com_z_m": float(pos[:, 2].mean()),
+            "ke_trans_J": float(0.5 * m * np.mean(np.sum(vel**2, axis=1))),
+            "ke_rot_J": float(0.5 * inertia * np.mean(np.sum(spin**2, axis=1)))}
+
+
+def series(frames: list[dict], length: float) -> dict:
+    """Measures of each frame as lists, with the frames' times."""
+    rows = [measures(f["position"], f["velocity"], f["spin"], length) for f in frames]
+    out = {"time_s": [f["time"] for f in frames]}
+    for k in rows[0]:
+        out[k] = [r[k] for r in rows]
+    return out
+
+
+# ---------------------------------------------------------------- dpm
+
+def scene(kind: str, st: dict, length: float, stl: Path | None = None):
+    """dpm's drum: ``kind`` "mesh" (the STL file ``stl``) or "tube" (analytic)."""
+    import dpm
+
+    sim = dpm.Simulation(dt=DT, gravity=(0.0, 0.0, -9.81), skin=SKIN,
+                         sphere_orientation=False)
+    glass = dpm.Material("glass", density=DENSITY, young=E_BEAD, poisson=NU_BEAD)
+    steel = dpm.Material("steel", density=7800.0, young=E_WALL, poisson=NU_WALL)
+    sim.contact(glass, glass, model="hertz_mindlin", restitution=E_PP, friction=MU_PP)
+    sim.contact(glass, steel, model="hertz_mindlin", restitution=E_PW, friction=MU_PW)
+    turn = dpm.Rotation(axis=(0.0, 1.0, 0.0), omega=OMEGA, center=(0.0, 0.0, 0.0))
+    if kind == "mesh":
+        sim.drum = sim.add_boundary("mesh", material=steel, file=str(stl), side="inside",
+                                    motion=turn)
+    else:
+        sim.drum = sim.add_boundary("tube", material=steel, start=(0.0, 0.0, 0.0),
+                                    axis=(0.0, 1.0, 0.0), length=length, radius=R_DRUM,
+                                    caps="both", motion=turn)
+    sim.add_particles("sphere", material=glass, radius=R_BEAD, positions=st["position"],
+                      velocities=st["velocity"])
+    return sim
+
+
+def _frame(sim) -> dict:
+    b = sim.bodies
+    return {"time": float(sim.time), "position": np.array(b.position),
+            "velocity": np.array(b.velocity), "spin": np.array(b.angular_velocity)}
+
+
+def simulate(kind: str, st: dict, cfg: dict, stl: Path, threads: int = 1,
+             warmup: int = WARMUP) -> dict:
+    """One dpm run: a warm-up of ``warmup`` steps in a throwaway scene (it compiles or
+    loads the step module, and takes the rebuild path once), then the spin-up and the
+    steady window, each timed, the state sampled every sample_steps. The measures of
+    every sample (:func:`series`) and the timings."""
+    t0 = time.perf_counter()
+    warm = scene(kind, st, cfg["length"], stl)
+    warm.threads = threads
+    warm.run(steps=warmup, progress=False)
+    first = time.perf_counter() - t0
+    del warm
+    sim = scene(kind, st, cfg["length"], stl)
+    sim.threads = threads  # (given: a scene under SMALL_SCENE elements runs 1 otherwise)
+    frames = [_frame(sim)]
+    loops = {}
+    for phase in ("spin", "window"):
+        loop = 0.0
+        for _ in range(cfg[f"{phase}_steps"] // cfg["sample_steps"]):
+            c0 = time.perf_counter()
+            sim.run(steps=cfg["sample_steps"], progress=False)
+            loop += time.perf_counter() - c0
+            frames.append(_frame(sim))
+        loops[phase] = loop
+    n = len(sim.bodies)
+    out = series(frames, cfg["length"])
+    out.update({"kind": kind, "threads": threads, "beads": n, "start_seed": st["seed"],
+                "loop_s": loops,
+                "particle_steps_per_s": {ph: n * cfg[f"{ph}_steps"] / loops[ph]
+                                         for ph in loops if loops[ph] > 0},
+                "warmup_s": first, "neighbour_rebuilds": sim.rebuild_count,
+                "drum_torque_y_Nm": float(sim.drum.torque[1])})
+    return out
+
+
+def worker(kind: str, start_file: str, cfg_json: str, out_file: str) -> None:
+    """:func:`simulate` in its own process (threads from DPM_THREADS), for its peak memory."""
+    z = np.load(start_file)
+    st = {"position": z["position"], "velocity": z["velocity"], "seed": int(z["seed"])}
+    out = simulate(kind, st, json.loads(cfg_json), Path(start_file).with_name("drum.stl"),
+                   int(os.environ.get("DPM_THREADS", "1")))
+    Path(out_file).write_text(json.dumps(out))
+
+
+def _wait(cmd, cwd, env) -> tuple[str, float, int]:
+    """Run cmd; its stdout, wall time and peak resident memory [kB] (os.wait4)."""
+    t0 = time.perf_counter()
+    p = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                         text=True)
+    out = p.stdout.read()
+    _, status, usage = os.wait4(p.pid, 0)
+    p.returncode = os.waitstatus_to_exitcode(status)
+    wall = time.perf_counter() - t0
+    if p.returncode:
+        raise RuntimeError(f"{cmd[0]} failed ({p.returncode}):\n{out[-3000:]}")
+    return out, wall, usage.ru_maxrss
+
+
+def run_dpm(kind: str, start_file: Path, cfg: dict, threads: int) -> dict:
+    out = start_file.with_name(f"dpm_{kind}_{threads}.json")
+    _, whole, rss = _wait([sys.executable, __file__, "--worker", kind, str(start_file),
+                           json.dumps(cfg), str(out)], None,
+                          {**os.environ, "DPM_THREADS": str(threads),
+                           "DPM_KERNELS": "scene", "DPM_BACKGROUND_COMPILE": "0"})
+    d = json.loads(out.read_text())
+    d.update(whole_process_s=whole, max_rss_kb=rss)
+    return d
+
+
+# ---------------------------------------------------------------- LIGGGHTS
+
+def read_dump(path: Path) -> list[dict]:
+    """Frames of LIGGGHTS' custom dump (id x y z vx vy vz omegax omegay omegaz, sorted)."""
+    frames = []
+    lines = path.read_text().splitlines()
+    k = 0
+    while k < len(lines):
+        if lines[k].startswith("ITEM: TIMESTEP"):
+            step = int(lines[k + 1])
+            n = int(lines[k + 3])
+            start_row = k + 9  # TIMESTEP, step, NUMBER, n, BOX x3+1, ATOMS header
+            d = np.array([[float(x) for x in ln.split()]
+                          for ln in lines[start_row:start_row + n]])
+            d = d[np.argsort(d[:, 0])]
+            frames.append({"time": step * DT, "position": d[:, 1:4], "velocity": d[:, 4:7],
+                           "spin": d[:, 7:10]})
+            k = start_row + n
+        else:
+            k += 1
+    return frames
+
+
+def run_liggghts(start_file: Path, cfg: dict) -> dict | None:
+    exe = shutil.which("liggghts")
+    if exe is None:
+        return None
+    z = np.load(start_file)
+    st = {"position": z["position"], "velocity": z["velocity"], "seed": int(z["seed"])}
+    with tempfile.TemporaryDirectory() as tmp:
+        t = Path(tmp)
+        write_data(t / "drum.data", st, cfg["length"])
+        shutil.copy(start_file.with_name("drum.stl"), t / "drum.stl")
+        shutil.copy(TEMPLATE, t / "drum.liggghts")
+        var = {"DT": DT, "SKIN": SKIN, "PERIOD": repr(PERIOD), "SPIN": cfg["spin_steps"],
+               "WINDOW": cfg["window_steps"], "SAMPLE": cfg["sample_steps"], "EP": E_BEAD,
+               "EW": E_WALL, "NUP": NU_BEAD, "NUW": NU_WALL, "EPP": E_PP, "EPW": E_PW,
+               "MUPP": MU_PP, "MUPW": MU_PW}
+        cmd = [exe, "-in", "drum.liggghts", "-echo", "none", "-log", "none"]
+        for k, v in var.items():
+            cmd += ["-var", k, str(v)]
+        out, whole, rss = _wait(cmd, tmp, {**os.environ, "OMP_NUM_THREADS": "1"})
+        frames = read_dump(t / "drum.dump")
+    loops = [float(x) for x in re.findall(r"Loop time of ([0-9.eE+-]+)", out)]
+    n = len(st["position"])
+    d = series(frames, cfg["length"])
+    d.update({"beads": n, "start_seed": st["seed"],
+              "loop_s": {"spin": loops[0], "window": loops[1]},
+              "particle_steps_per_s": {"spin": n * cfg["spin_steps"] / loops[0],
+                                       "window": n * cfg["window_steps"] / loops[1]},
+              "whole_process_s": whole, "max_rss_kb": rss,
+              "warnings": sorted({ln.strip() for ln in out.splitlines()
+                                  if ln.startswith("WARNING")})[:10]})
+    return d
+
+
+# ---------------------------------------------------------------- comparison and plot
+
+KEYS = ("angle_deg", "com_x_m", "com_z_m", "ke_trans_J", "ke_rot_J")
+
+
+def window_means(d: dict, cfg: dict) -> dict:
+    """Mean and standard deviation of each measure over the samples of the steady window
+    (after the spin-up)."""
+    t = np.array(d["time_s"])
+    sel = t > cfg["spin_steps"] * DT + 1e-9
+    return {k: {"mean": float(np.mean(np.array(d[k])[sel])),
+                "std": float(np.std(np.array(d[k])[sel]))} for k in KEYS}
+
+
+def compare(runs: dict, cfg: dict) -> dict:
+    """Each dpm variant's window means against the LIGGGHTS runs' range."""
+    lg = [window_means(r, cfg) for r in runs["liggghts"]]
+    out = {}
+    for k in KEYS:
+        lv = np.array([x[k]["mean"] for x in lg])
+        row = {"liggghts": lv.tolist(), "liggghts_spread": float(np.ptp(lv)),
+               "liggghts_mean": float(lv.mean()),
+               "liggghts_std_in_time": [x[k]["std"] for x in lg]}
+        for kind in ("mesh", "tube"):
+            dv = np.array([window_means(d, cfg)[k]["mean"] for d in runs[kind]])
+            gap = np.maximum(lv.min() - dv, dv - lv.max()).clip(0)
+            row[f"dpm_{kind}"] = dv.tolist()
+            row[f"dpm_{kind}_mean"] = float(dv.mean())
+            row[f"dpm_{kind}_rel_diff"] = float(dv.mean() / lv.mean() - 1)
+            row[f"dpm_{kind}_outside_liggghts"] = gap.tolist()
+        out[k] = row
+    return out
+
+
+def plot(result: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(2, 3, figsize=(16, 8.5))
+    panels = [("angle_deg", "dynamic angle of repose [deg]", 1.0),
+              ("com_x_m", "centre of mass, x (lifted side) [mm]", 1e3),
+              ("com_z_m", "centre of mass, z above the axis [mm]", 1e3),
+              ("ke_trans_J", "mean translational KE per bead [nJ]", 1e9),
+              ("ke_rot_J", "mean rotational KE per bead [nJ]", 1e9)]
+    curves = []
+    for k, r in enumerate(result["runs"]["liggghts"] or []):
+        curves.append((r, f"LIGGGHTS start {r['start_seed']}", "0.35", "-", 1.2, k))
+    for kind, col in (("mesh", "C0"), ("tube", "C3")):
+        for k, d in enumerate(result["runs"][kind]):
+            curves.append((d, f"dpm {kind} start {d['start_seed']} ({d['threads']} thr.)",
+                           col, "--", 1.4, k))
+    t_spin = result["config"]["spin_steps"] * DT
+    for a, (key, label, scale) in zip(ax.ravel()[:5], panels, strict=True):
+        for d, lab, col, ls, lw, k in curves:
+            a.plot(d["time_s"], np.array(d[key]) * scale, color=col, ls=ls if k == 0 else ":",
+                   lw=lw, label=lab)
+        a.axvline(t_spin, color="0.7", lw=0.8)
+        a.set_xlabel("time [s] (grey line: start of the steady window)")
+        a.set_ylabel(label)
+    ax[0, 0].legend(fontsize=7)
+    a = ax[1, 2]
+    names, vals = [], []
+    sp = result["speed_ratios"]
+    for key, lab in (("mesh_1_thread", "mesh 1t"), ("mesh_2_threads", "mesh 2t"),
+                     ("tube_1_thread", "tube 1t"), ("tube_2_threads", "tube 2t")):
+        v = (sp.get(key) or {}).get("window")
+        if v:
+            names.append(lab)
+            vals.append(v)
+    if vals:
+        bars = a.bar(range(len(vals)), vals, color=["C0", "C0", "C3", "C3"][:len(vals)])
+        a.set_xticks(range(len(vals)), names)
+        a.bar_label(bars, labels=[f"{v:.2f}" for v in vals])
+        a.axhline(1.0, color="0.5", lw=0.8)
+    a.set_ylabel("dpm / LIGGGHTS 1 core, steady window\n(particle-steps/s)")
+    c = result["config"]
+    fig.suptitle(f"Rotating drum, {result['beads']} beads, R = {R_DRUM * 1e3:g} mm, "
+                 f"depth {c['length'] * 1e3:g} mm, {60 / PERIOD:.1f} rpm (Fr {FROUDE:g}): "
+                 f"dpm (STL mesh, analytic tube) vs LIGGGHTS 3.8 move/mesh; load average "
+                 f"{result['load_average'][0]:.1f}-{result['load_average'][1]:.1f}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+
+
+def main(argv: list[str] | None = None) -> dict:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="12 mm deep drum, 1.2 s")
+    p.add_argument("--no-liggghts", action="store_true")
+    p.add_argument("--worker", nargs=4, help=argparse.SUPPRESS)
+    a = p.parse_args(argv)
+    if a.worker:
+        worker(*a.worker)
+        return {}
+    cfg = config("quick" if a.quick else "full")
+    two = (os.cpu_count() or 1) >= 2
+    runs = {"liggghts": [], "mesh": [], "tube": []}
+    loads = [os.getloadavg()[0]]
+    with tempfile.TemporaryDirectory() as tmp:
+        t = Path(tmp)
+        tris = drum_triangles(cfg["length"])
+        write_stl(t / "drum.stl", tris)
+        prep = {}
+        for k, seed in enumerate(STARTS):
+            st = start(cfg["length"], seed)
+            sf = t / f"start_{seed}.npz"
+            np.savez(sf, position=st["position"], velocity=st["velocity"], seed=seed)
+            if k == 0:  # compile (or load) each step module in a process of its own first
+                for kind in ("mesh", "tube"):
+                    w = run_dpm(kind, sf, {**cfg, "spin_steps": 0, "window_steps": 0}, 1)
+                    prep[kind] = {"whole_process_s": w["whole_process_s"],
+                                  "max_rss_kb": w["max_rss_kb"]}
+            threads = 2 if k == 1 and two else 1
+            r = None if a.no_liggghts else run_liggghts(sf, cfg)
+            if r is not None:
+                runs["liggghts"].append(r)
+                print(f"LIGGGHTS start {seed}: {r['particle_steps_per_s']}", flush=True)
+            for kind in ("mesh", "tube"):
+                d = run_dpm(kind, sf, cfg, threads)
+                runs[kind].append(d)
+                print(f"dpm {kind} start {seed}, {threads} thread(s): "
+                      f"{d['particle_steps_per_s']}", flush=True)
+            loads.append(os.getloadavg()[0])
+    n = runs["mesh"][0]["beads"]
+
+    def rate(rs):
+        return ({ph: float(np.mean([r["particle_steps_per_s"][ph] for r in rs]))
+                 for ph in ("spin", "window")} if rs else None)
+
+    lg = rate(runs["liggghts"])
+    speed = {"liggghts_1_core": lg, "note": "LIGGGHTS: mean of its runs (one per start); "
+             "dpm 1 thread: start A, 2 threads: start B (the same work: the same bead count "
+             "and drum)"}
+    for kind in ("mesh", "tube"):
+        for d in runs[kind]:
+            key = f"{kind}_{d['threads']}_thread{'s' if d['threads'] > 1 else ''}"
+            speed[f"dpm_{key}"] = d["particle_steps_per_s"]
+            if lg:
+                speed[key] = {ph: d["particle_steps_per_s"][ph] / lg[ph] for ph in lg}
+    physics = compare(runs, cfg) if runs["liggghts"] else None
+    mem = {f"dpm_{kind}_{d['threads']}t_kb": d["max_rss_kb"] for kind in ("mesh", "tube")
+           for d in runs[kind]}
+    if runs["liggghts"]:
+        mem["liggghts_kb"] = runs["liggghts"][0]["max_rss_kb"]
+    result = {"scene": "rotating drum, half filled", "beads": n, "quick": a.quick,
+              "config": cfg, "dt": DT, "skin": SKIN, "omega_rad_s": OMEGA, "period_s": PERIOD,
+              "rpm": 60 / PERIOD, "froude": FROUDE,
+              "drum": {"radius": R_DRUM, "length": cfg["length"], "n_theta": N_THETA,
+                       "cap_spacing": CAP_SPACING, "stl_triangles": int(len(tris))},
+              "material": {"bead": {"density": DENSITY, "young": E_BEAD, "poisson": NU_BEAD},
+                           "wall": {"young": E_WALL, "poisson": NU_WALL},
+                           "restitution": {"bead-bead": E_PP, "bead-wall": E_PW},
+                           "friction": {"bead-bead": MU_PP, "bead-wall": MU_PW},
+                           "rolling_friction": 0.0},
+              "surface_fit": SURFACE, "starts": list(STARTS),
+              "machine": platform.processor() or platform.machine(), "cores": os.cpu_count(),
+              "load_average": [min(loads), max(loads)],
+              "timing_note": "2-core machine shared with other work while this ran: timings "
+                             "are noisy (load average: 1-minute figures sampled between "
+                             "runs); dpm after a warm-up that compiles; LIGGGHTS one core",
+              "physics": physics, "speed_ratios": speed, "memory_max_rss": mem,
+              "dpm_compile_or_load": prep, "runs": runs}
+    RESULTS.mkdir(exist_ok=True)
+    stem = "drum_peer_quick" if a.quick else "drum_peer"
+    (RESULTS / f"{stem}.json").write_text(json.dumps(result, indent=1))
+    plot(result, RESULTS / f"{stem}.png")
+    print(json.dumps({"physics": physics, "speed_ratios": speed, "memory": mem}, indent=1))
+    return result
+
+
+if __name__ == "__main__":
+    main()
