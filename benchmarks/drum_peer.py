@@ -389,21 +389,31 @@ def window_means(d: dict, cfg: dict) -> dict:
 
 
 def compare(runs: dict, cfg: dict) -> dict:
-    """Each dpm variant's window means against the LIGGGHTS runs' range."""
+    """Each dpm variant's window means against the LIGGGHTS runs'. Two starts give a
+    rough range, so the statistical error of one run's window mean is given too:
+    ``window_mean_se`` = rms in-time standard deviation over all runs / sqrt(samples)
+    (the samples taken as independent). ``dpm_KIND_within`` is true when the mean of dpm's
+    runs is within max(LIGGGHTS' range / 2, 2 window_mean_se) of LIGGGHTS' mean."""
     lg = [window_means(r, cfg) for r in runs["liggghts"]]
+    every = [window_means(r, cfg) for k in ("liggghts", "mesh", "tube") for r in runs[k]]
+    n = cfg["window_steps"] // cfg["sample_steps"]
     out = {}
     for k in KEYS:
         lv = np.array([x[k]["mean"] for x in lg])
-        row = {"liggghts": lv.tolist(), "liggghts_spread": float(np.ptp(lv)),
+        se = float(np.sqrt(np.mean([x[k]["std"] ** 2 for x in every]) / n))
+        row = {"liggghts": lv.tolist(), "liggghts_range": float(np.ptp(lv)),
                "liggghts_mean": float(lv.mean()),
-               "liggghts_std_in_time": [x[k]["std"] for x in lg]}
+               "liggghts_std_in_time": [x[k]["std"] for x in lg], "window_mean_se": se}
         for kind in ("mesh", "tube"):
             dv = np.array([window_means(d, cfg)[k]["mean"] for d in runs[kind]])
             gap = np.maximum(lv.min() - dv, dv - lv.max()).clip(0)
+            diff = float(dv.mean() - lv.mean())
             row[f"dpm_{kind}"] = dv.tolist()
             row[f"dpm_{kind}_mean"] = float(dv.mean())
+            row[f"dpm_{kind}_diff"] = diff
             row[f"dpm_{kind}_rel_diff"] = float(dv.mean() / lv.mean() - 1)
-            row[f"dpm_{kind}_outside_liggghts"] = gap.tolist()
+            row[f"dpm_{kind}_outside_liggghts_range"] = gap.tolist()
+            row[f"dpm_{kind}_within"] = bool(abs(diff) <= max(np.ptp(lv) / 2, 2 * se))
         out[k] = row
     return out
 
