@@ -50,5 +50,15 @@ __all__ = [
     "Oscillation", "Outlet", "ParameterError", "Region", "register", "registry", "restart",
     "Rotation", "SceneError", "Shape", "Simulation", "Translation", "TriangularOscillation",
     "Tumbling", "UnknownNameError", "UnstableRunError", "__version__", "Reciprocating",
-    "Face", "RectangleFace", "DiscFace", "MeshFace",
+    "Face", "RectangleFace", "DiscFace", "MeshFace", "advise",
 ]
+
+
+def __getattr__(name: str):
+    """``dpm.advise`` (:func:`dpm.advice.advise`) is imported on first use, as h5py, scipy
+    and trimesh are (``dpm/_lazy.py``): ``import dpm`` does not load the advisor."""
+    if name == "advise":
+        from .advice import advise
+
+        return advise
+    raise AttributeError(f"module 'dpm' has no attribute {name!r}")

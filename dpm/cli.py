@@ -1,5 +1,5 @@
 """Command line: ``dpm run``, ``dpm plugins``, ``dpm xdmf``, ``dpm analyse``, ``dpm shapes``,
-``dpm validate``, ``dpm new-plugin``, ``dpm compile``, ``dpm clear-cache``."""
+``dpm validate``, ``dpm new-plugin``, ``dpm compile``, ``dpm clear-cache``, ``dpm advise``."""
 
 from __future__ import annotations
 
@@ -174,6 +174,29 @@ def _cmd_new_plugin(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_advise(args: argparse.Namespace) -> int:
+    import json
+
+    from .advice import advise
+    from .io.scene import load_scene
+
+    sim, run_kw = load_scene(args.scene, output=False)
+    run_time = args.run_time
+    if run_time is None and run_kw:
+        run_time = (float(run_kw["until"]) if "until" in run_kw
+                    else float(run_kw.get("steps", 0)) * sim.dt or None)
+    advice = advise(sim, tolerance=args.tolerance, quantity=args.quantity, verify=args.verify,
+                    run_time=run_time, window=None if args.window is None else
+                    tuple(args.window), impact_speed=args.impact_speed,
+                    integrators=args.integrator, models=args.model,
+                    max_rayleigh=args.max_rayleigh,
+                    pilot=lambda: load_scene(args.scene, output=False)[0])
+    print(advice)
+    if args.json:
+        Path(args.json).write_text(json.dumps(advice.as_dict(), indent=1, default=str) + "\n")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     from .plugins import version
 
@@ -261,6 +284,31 @@ def main(argv: list[str] | None = None) -> int:
     n.add_argument("name", metavar="NAME", help="distribution name, e.g. dpm-pebbles")
     n.add_argument("--dir", default=".", help="where to create NAME/ (default: here)")
     n.set_defaults(func=_cmd_new_plugin)
+    ad = sub.add_parser("advise", help="the cheapest impact model, integrator, time step, "
+                        "skin and shape resolution that meet a tolerance on a quantity, with "
+                        "the predicted error and cost (docs/advise.md)")
+    ad.add_argument("scene", help="a TOML scene file")
+    ad.add_argument("--tolerance", type=float, default=0.01,
+                    help="relative error of the quantity allowed (default 0.01: 1 %%)")
+    ad.add_argument("--quantity", default="settled_height",
+                    help="settled_height, angle_of_repose or discharge_rate")
+    ad.add_argument("--verify", action="store_true", help="also run the scene at the chosen "
+                    "step and at half of it (Richardson estimate of the error)")
+    ad.add_argument("--run-time", type=float, default=None, metavar="SECONDS",
+                    help="simulated time of the run (default: the scene's [run])")
+    ad.add_argument("--window", type=float, nargs=2, default=None, metavar=("START", "END"),
+                    help="the quantity's averaging window [s]")
+    ad.add_argument("--impact-speed", type=float, default=None, metavar="M_S",
+                    help="the speed contacts are resolved at (default: the time-step check's)")
+    ad.add_argument("--integrator", action="append", default=None, metavar="NAME",
+                    help="only this integrator (repeatable)")
+    ad.add_argument("--model", action="append", default=None, metavar="NAME",
+                    help="only this impact model ('as set': the scene's own; repeatable)")
+    ad.add_argument("--max-rayleigh", type=float, default=1.0,
+                    help="largest step as a fraction of the Rayleigh step (default 1)")
+    ad.add_argument("--json", default=None, metavar="FILE", help="also write the advice "
+                    "as JSON")
+    ad.set_defaults(func=_cmd_advise)
     args = p.parse_args(argv)
     try:
         return args.func(args)

@@ -1,0 +1,331 @@
+"""The advisor's error model, cost model and search (equations in docs/advise.md).
+
+Error of the quantity Q for a set-up (integrator I, impact model m, step dt, shape
+resolution rho), the sum of three parts taken as independent upper bounds:
+
+    eps_Q = max_p [ S_e E_e(I, m, e_p, n_p) + (d_p/R_p) max(E_T, E_d)(I, m, e_p, n_p) ]
+          + max_p (d_p/R_p) max(|T'/T - 1|, |d'/d - 1|, |kappa'/kappa - 1|)      (m not the scene's)
+          + S_shape dev_rms(rho)
+
+over the material pairs p that can meet: n_p = T_p/dt steps resolve pair p's contact of
+duration T_p at the impact speed v; E_e, E_T, E_d are the tables' relative errors of one
+collision's restitution, duration and largest overlap at n_p steps (mean over the contact's
+start within a step, made monotone in n: E(n) = max over n' >= n); d_p/R_p = (15 m* v^2 /
+(16 E* sqrt(R*)))^(2/5) / r is Hertz's largest overlap over the smaller body's radius, the
+weight with which a stiffness or duration error moves lengths; S_e the quantity's measured
+sensitivity to the restitution (d ln Q / d ln e); T', d', kappa' the duration, overlap and
+tangential over normal stiffness of the replacing law against Hertz-Mindlin's; dev_rms the clustered
+shape's RMS surface deviation over its equal-volume radius.
+
+Cost per simulated second (one thread), wall seconds:
+
+    C = t_step / dt,   t_step = f_I [N_b c_b + (N_e - N_b) c_el + (z/2) N_e c_c(m)]
+                              + N_e [c_l L(s) + c_r g(s) 2 v_r dt / s]
+
+with c_b, c_el, c_c the per-body, per-element and per-touching-pair costs, f_I the
+integrator's cost per step over velocity Verlet's, z touching partners per element, L(s) =
+4 phi ((1 + s/(2 r))^3 - 1) the listed non-touching partners per element for skin s
+(phi = 0.6), c_r the cost of a rebuild per element, scaled by g(s), the search volume over
+that of the default skin, and rebuilt every s/(2 v_r dt) steps (v_r the speed that moves
+elements between rebuilds).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from .scene import (
+    HERTZ_ALTERNATIVES,
+    IMPLICIT,
+    NOT_CANDIDATES,
+    SceneFacts,
+    alternative_law,
+    tangential_ratio,
+)
+from .tables import Tables
+
+#: skins tried, in units of the smallest element radius (dpm's default: 0.4)
+SKINS = (0.2, 0.4, 0.6, 0.8, 1.2, 1.6)
+PACKING = 0.6
+#: the tunnelling guard stops a run when a body moves more than half its radius in a step;
+#: the advice keeps dt under it at twice the impact speed
+SPEED_MARGIN = 2.0
+
+
+@dataclass(frozen=True)
+class Setting:
+    """A set-up: impact model ("as set": the scene's own laws), integrator, step [s], skin
+    [m], clustered shapes' resolution (None: the scene's, or spheres only)."""
+
+    impact_model: str
+    integrator: str
+    dt: float
+    skin: float
+    resolution: float | None = None
+
+    def describe(self) -> str:
+        res = "" if self.resolution is None else f", resolution {self.resolution:g}"
+        return (f"{self.impact_model}, {self.integrator}, dt = {self.dt:.4g} s, skin = "
+                f"{self.skin:.3g} m{res}")
+
+
+@dataclass
+class Prediction:
+    """A set-up with its predicted error (relative, of the quantity) and its parts, its
+    predicted cost [wall s per simulated s, one thread], the fewest steps per contact over
+    the scene's pairs and what limited dt."""
+
+    setting: Setting
+    error: float
+    parts: dict[str, float]
+    cost: float
+    steps_per_contact: float
+    limited_by: str
+    notes: list[str] = field(default_factory=list)
+
+
+class Model:
+    """Error and cost model of one scene and quantity (see the module docstring)."""
+
+    def __init__(self, facts: SceneFacts, tables: Tables, sensitivity: float,
+                 coordination: float | None = None, max_rayleigh: float = 1.0) -> None:
+        self.f = facts
+        self.t = tables
+        self.S = float(sensitivity)
+        self.z = float(coordination if coordination is not None
+                       else tables.cost["coordination"])
+        self.max_rayleigh = float(max_rayleigh)
+        self._laws: dict[tuple[int, str], Any] = {}
+
+    # ------------------------------------------------------------------ helpers
+    def law(self, k: int, model: str) -> Any:
+        p = self.f.pairs[k]
+        if model in ("as set", p.model):
+            return p.law
+        key = (k, model)
+        if key not in self._laws:
+            self._laws[key] = alternative_law(p, model, self.f.impact_speed)
+        return self._laws[key]
+
+    def overlap_ratio(self, k: int) -> float:
+        p = self.f.pairs[k]
+        d = p.hertz_overlap(self.f.impact_speed)
+        if not math.isfinite(d):  # laws without elastic constants: their own spring
+            kn = float(p.law.params.get("stiffness", math.nan))
+            d = self.f.impact_speed * math.sqrt(p.meff / kn)
+        return d / p.radius
+
+    def current_resolution(self) -> float | None:
+        """The clustered shapes' resolution, found from their elements per body in the
+        shape table (the first clustered shape's; None: spheres only)."""
+        if not self.f.shapes:
+            return None
+        s = self.f.shapes[0]
+        return self._shape_table(s.name)[0]["inferred"](s.count)
+
+    def _shape_table(self, name: str) -> tuple[dict, list[str]]:
+        import numpy as np
+
+        tab = self.t.shape(name)
+        notes = []
+        if tab is None:
+            names = self.t.shape_names()
+            notes.append(f"shape {name!r} is not in the shape table ({', '.join(names)}): "
+                         "their mean is taken")
+            rows = [self.t.shape(n) for n in names]
+            tab = {k: list(np.mean([r[k] for r in rows], axis=0))
+                   for k in ("resolution", "count", "dev_rms_rel", "r_min_over_r_eq")}
+        x = np.asarray(tab["resolution"], float)
+        lc = np.log(np.asarray(tab["count"], float))
+        lr = np.log(np.asarray(tab["r_min_over_r_eq"], float))
+        out = {"x": x,
+               "inferred": lambda count: float(np.interp(np.log(count), lc, x)),
+               "count": lambda res: float(np.exp(np.interp(res, x, lc))),
+               "r_min": lambda res: float(np.exp(np.interp(res, x, lr))),
+               "dev": lambda res: float(np.interp(res, x, tab["dev_rms_rel"]))}
+        return out, notes
+
+    def shape_scale(self, resolution: float | None) -> tuple[float, float, float, list[str]]:
+        """(elements per body over the scene's, smallest element over the scene's, RMS
+        surface deviation over the equal-volume radius) of the clustered shapes at
+        ``resolution`` (table ratios between it and the scene's inferred resolution)."""
+        if not self.f.shapes:
+            return 1.0, 1.0, 0.0, []
+        cnt, rmin, dev, notes = 1.0, 1.0, 0.0, []
+        for s in self.f.shapes:
+            tab, n = self._shape_table(s.name)
+            notes += n
+            now = tab["inferred"](s.count)
+            res = now if resolution is None else resolution
+            if not tab["x"].min() <= res <= tab["x"].max():
+                notes.append(f"resolution {res:g} outside the measured "
+                             f"{tab['x'].min():g}-{tab['x'].max():g}")
+            cnt = max(cnt, tab["count"](res) / tab["count"](now))
+            rmin = min(rmin, tab["r_min"](res) / tab["r_min"](now))
+            dev = max(dev, tab["dev"](res))
+        return cnt, rmin, dev, list(dict.fromkeys(notes))
+
+    # ------------------------------------------------------------------ error
+    def error(self, model: str, integrator: str, dt: float, rmin_scale: float = 1.0,
+              shape_dev: float = 0.0) -> tuple[float, dict[str, float], float, list[str]]:
+        """(eps_Q, its parts, the fewest steps per contact, notes) at ``dt``."""
+        notes: list[str] = []
+        e_dt, e_model, n_min = 0.0, 0.0, math.inf
+        for k, p in enumerate(self.f.pairs):
+            law = self.law(k, model)
+            T = self.f.contact_time(p, law) * rmin_scale
+            n = T / dt
+            n_min = min(n_min, n)
+            e = p.restitution
+            if not math.isfinite(e):
+                e = 0.5
+                notes.append(f"{p.label}: restitution not given (dissipation): the table of "
+                             "e = 0.5 is taken")
+            look = {kind: self.t.contact_error(integrator, law.name, e, n, kind)
+                    for kind in ("restitution", "duration", "max_overlap")}
+            for lk in look.values():
+                notes += lk.notes
+            w = self.overlap_ratio(k)
+            e_dt = max(e_dt, self.S * look["restitution"].value
+                       + w * max(look["duration"].value, look["max_overlap"].value))
+            if law is not p.law:
+                T0 = self.f.contact_time(p)
+                d0 = p.hertz_overlap(self.f.impact_speed)
+                if law.name == "maw_linear_spring":
+                    d1 = d0  # built to reach Hertz's largest overlap at v
+                else:  # hooke: k = 4/3 E* R*
+                    from ..material import effective_young
+
+                    kn = 4 / 3 * effective_young(p.a, p.b) * p.reff
+                    d1 = self.f.impact_speed * math.sqrt(p.meff / kn)
+                kap = tangential_ratio(p, law.name) / tangential_ratio(p, p.model)
+                e_model = max(e_model, w * max(abs(T / rmin_scale / T0 - 1),
+                                               abs(d1 / d0 - 1), abs(kap - 1)))
+        parts = {"time_step": e_dt, "impact_model": e_model, "shape": shape_dev}
+        return e_dt + e_model + shape_dev, parts, n_min, list(dict.fromkeys(notes))
+
+    # ------------------------------------------------------------------ cost
+    def cost(self, model: str, integrator: str, dt: float, skin: float,
+             count_scale: float = 1.0, rmin_scale: float = 1.0) -> tuple[float, list[str]]:
+        """Wall seconds per simulated second, one thread."""
+        c = self.t.cost
+        f = self.f
+        ne = f.elements * count_scale
+        nb = f.bodies
+        models = {p.model for p in f.pairs} if model == "as set" else {model}
+        cc, notes = 0.0, []
+        for m in models:
+            x, n = self.t.contact_ns(m)
+            cc = max(cc, x)
+            notes += n
+        fi, n = self.t.step_factor(integrator)
+        notes += n
+        r = f.r_min * rmin_scale
+        per_step = fi * (nb * c["body_ns"] + (ne - nb) * c["element_ns"]
+                         + 0.5 * self.z * ne * cc)
+        listed = 4 * PACKING * ((1 + skin / (2 * r)) ** 3 - 1)
+        v_r = c["rebuild_speed_factor"] * f.impact_speed
+        grow = ((2 * r + skin) / (2.4 * r)) ** 3
+        per_step += ne * (c["listed_pair_ns"] * listed
+                          + c["rebuild_ns_per_element"] * grow * 2 * v_r * dt / skin)
+        return per_step * 1e-9 / dt, notes
+
+    # ------------------------------------------------------------------ search
+    def caps(self, integrator: str, model: str, rmin_scale: float) -> list[tuple[float, str]]:
+        """Largest steps the engine and the guards allow: (dt, why)."""
+        from ..plugins import registry
+
+        n_min = registry().lookup("integrator", integrator).min_steps_per_contact
+        t_min = min(self.f.contact_time(p, self.law(k, model)) * rmin_scale
+                    for k, p in enumerate(self.f.pairs))
+        out = [(t_min / n_min, f"{n_min:g} steps per contact (the engine's least for "
+                               f"{integrator})")]
+        if self.f.rayleigh is not None:
+            out.append((self.max_rayleigh * self.f.rayleigh * rmin_scale,
+                        f"{self.max_rayleigh:g} x the Rayleigh time step"))
+        out.append((self.f.r_min * rmin_scale / (2 * SPEED_MARGIN * self.f.impact_speed),
+                    "the tunnelling guard at twice the impact speed"))
+        return out
+
+    def best_dt(self, model: str, integrator: str, budget: float, rmin_scale: float
+                ) -> tuple[float, str]:
+        """The largest dt whose time-step and model error stays within ``budget``."""
+        dt_cap, why = min(self.caps(integrator, model, rmin_scale))
+        if self.error(model, integrator, dt_cap, rmin_scale)[0] <= budget:
+            return dt_cap, why
+        t_max = max(self.f.contact_time(p, self.law(k, model)) * rmin_scale
+                    for k, p in enumerate(self.f.pairs))
+        lo = t_max / (3.99 * self.t.measured_steps()[1])  # the tables' reach, every pair
+        if lo >= dt_cap or self.error(model, integrator, lo, rmin_scale)[0] > budget:
+            return math.nan, "no step reaches the tolerance"
+        hi = dt_cap
+        for _ in range(60):
+            mid = math.sqrt(lo * hi)
+            if self.error(model, integrator, mid, rmin_scale)[0] <= budget:
+                lo = mid
+            else:
+                hi = mid
+            if hi / lo < 1 + 1e-6:
+                break
+        return lo, "the tolerance"
+
+    def predict(self, setting: Setting, limited_by: str = "as set") -> Prediction:
+        cnt, rs, dev, notes = self.shape_scale(setting.resolution)
+        err, parts, n, n2 = self.error(setting.impact_model, setting.integrator, setting.dt,
+                                       rs, self.S_shape * dev)
+        cost, n3 = self.cost(setting.impact_model, setting.integrator, setting.dt,
+                             setting.skin, cnt, rs)
+        return Prediction(setting, err, parts, cost, n, limited_by,
+                          list(dict.fromkeys(notes + n2 + n3)))
+
+    S_shape = 1.0
+
+    def candidates(self, integrators: list[str] | None, models: list[str] | None
+                   ) -> tuple[list[str], list[str], list[float | None]]:
+        f = self.f
+        if integrators is None:
+            integrators = [i for i in self.t.integrators() if i not in NOT_CANDIDATES
+                           and (i not in IMPLICIT or f.implicit_ok)]
+        own = {p.model for p in f.pairs}
+        if models is None:
+            models = ["as set"]
+            if own == {"hertz_mindlin"}:
+                models += list(HERTZ_ALTERNATIVES)
+        resolutions: list[float | None] = [None]
+        if f.shapes:
+            now = self.current_resolution()
+            x = self._shape_table(f.shapes[0].name)[0]["x"]
+            resolutions = sorted({now, *(float(r) for r in x)})
+        return integrators, models, resolutions
+
+    def search(self, tolerance: float, integrators: list[str] | None = None,
+               models: list[str] | None = None) -> list[Prediction]:
+        """Every candidate's cheapest set-up meeting ``tolerance``, cheapest first (those
+        that cannot: last, by error)."""
+        ints, mods, ress = self.candidates(integrators, models)
+        out = []
+        for res in ress:
+            cnt, rs, dev, _ = self.shape_scale(res)
+            for integ in ints:
+                for model in mods:
+                    budget = tolerance - self.S_shape * dev
+                    dt, why = (self.best_dt(model, integ, budget, rs) if budget > 0
+                               else (math.nan, "the shape error alone exceeds the tolerance"))
+                    if not math.isfinite(dt):  # out of reach: reported at its largest step
+                        dt, why = min(self.caps(integ, model, rs))[0], "out of reach"
+                    best = None
+                    for sk in SKINS:
+                        s = Setting(model, integ, dt, sk * self.f.r_min * rs, res)
+                        p = self.predict(s, why)
+                        if best is None or p.cost < best.cost:
+                            best = p
+                    out.append(best)
+        ok = [p for p in out if p.error <= tolerance * (1 + 1e-9)]
+        bad = [p for p in out if p not in ok]
+        own_i = self.f.integrator
+        ok.sort(key=lambda p: (round(p.cost, 12), p.setting.integrator != own_i,
+                               p.setting.impact_model != "as set"))
+        bad.sort(key=lambda p: p.error)
+        return ok + bad
