@@ -19,25 +19,28 @@ The drum, three ways:
 The same starts: the beads on a jittered lattice in the lower part of the drum with small
 random velocities, generated here for two seeds; LIGGGHTS reads them from a data file
 (``read_data``, with a Velocities section). LIGGGHTS runs from both starts (its
-run-to-run spread), dpm's mesh and tube from both starts too (start A on one thread, start
-B on two: the results do not depend on the thread count, bit for bit, so the second start
-also times two threads). The runs go in turn (LIGGGHTS A, dpm mesh A, dpm tube A,
-LIGGGHTS B, ...) so that a change of load on a shared machine falls on both codes.
+run-to-run spread), and so do dpm's mesh and tube. The runs go in turn (LIGGGHTS 1, dpm
+mesh 1, dpm tube 1, LIGGGHTS 2, ...) so that a change of load on a shared machine falls
+on both codes.
 
 Compared, every 0.05 s from the same positions, velocities and spins (LIGGGHTS' dump,
 dpm's state): the dynamic angle of repose (``dpm.analysis.drum_surface``, ``method=
 "fraction"``: the bed's surface in 10 columns over the middle 70 % of the diameter, a line
 fitted through them), the bed's centre of mass in the cross-section (x: horizontal,
-positive where the bed is lifted; z: height above the axis) and the mean kinetic energy
-per bead (translational and rotational). Means over the steady window (after 0.56
-revolution of spin-up in which the bed settles and is lifted; the window is 0.85
-revolution) are compared, dpm against the LIGGGHTS runs' range.
+positive on the lifted side; z: height above the axis) and the mean kinetic energy per
+bead (translational and rotational). Means over the steady window are compared (the
+spin-up, in which the bed settles and is lifted and the first avalanche overshoots, is
+0.5 s = 0.35 revolution, 0.4 s at ``--quick``; the window 0.7 s = 0.49 revolution, 0.4 s
+at ``--quick``: the bed is steady from about 0.35 s on, see the figure), dpm against the
+LIGGGHTS runs' range and the window mean's own statistical error.
 
-Speed: particle-steps per second of each phase (spin-up; steady window), dpm on 1 thread
-and 2 threads (``DPM_THREADS`` and ``sim.threads``, the scene's own step module,
-``DPM_KERNELS=scene``, after a warm-up run in the same process that compiles or loads it),
-LIGGGHTS on one core ("Loop time" of each ``run``); peak resident memory (ru_maxrss) of
-each process.
+Speed: particle-steps per second of each phase (spin-up; steady window). dpm runs the
+scene's own step module (``DPM_KERNELS=scene``), after a warm-up in a process of its own
+that compiles or loads it, and in each run after a warm-up scene of 500 steps. Start 1's
+window runs its 0.05 s intervals on 1 and 2 threads in turn (``sim.threads``; a run's
+results are the same bit for bit for any thread count): both counts timed on the same
+steps under the same load; everything else on 1 thread. LIGGGHTS on one core ("Loop
+time" of each ``run``). Peak resident memory (ru_maxrss) of each process.
 
     python benchmarks/drum_peer.py [--quick] [--no-liggghts]
 
@@ -249,47 +252,54 @@ def _frame(sim) -> dict:
             "velocity": np.array(b.velocity), "spin": np.array(b.angular_velocity)}
 
 
-def simulate(kind: str, st: dict, cfg: dict, stl: Path, threads: int = 1,
+def simulate(kind: str, st: dict, cfg: dict, stl: Path, threads: tuple = (1,),
              warmup: int = WARMUP) -> dict:
     """One dpm run: a warm-up of ``warmup`` steps in a throwaway scene (it compiles or
     loads the step module, and takes the rebuild path once), then the spin-up and the
-    steady window, each timed, the state sampled every sample_steps. The measures of
-    every sample (:func:`series`) and the timings."""
+    steady window, the state sampled every sample_steps. The spin-up runs on
+    ``threads[0]`` threads; the window's sample intervals take the counts of ``threads``
+    in turn, each timed (a run's results are the same bit for bit for any thread count, so
+    this times the thread counts on the same steps under the same load). The measures of
+    every sample (:func:`series`) and particle-steps per second per phase and thread count.
+    """
     t0 = time.perf_counter()
     warm = scene(kind, st, cfg["length"], stl)
-    warm.threads = threads
-    warm.run(steps=warmup, progress=False)
+    for k in sorted(set(threads)):
+        warm.threads = k
+        warm.run(steps=warmup, progress=False)
     first = time.perf_counter() - t0
     del warm
     sim = scene(kind, st, cfg["length"], stl)
-    sim.threads = threads  # (given: a scene under SMALL_SCENE elements runs 1 otherwise)
+    n = len(sim.bodies)
     frames = [_frame(sim)]
-    loops = {}
+    loops = {"spin": {}, "window": {}}
+    steps = {"spin": {}, "window": {}}
     for phase in ("spin", "window"):
-        loop = 0.0
-        for _ in range(cfg[f"{phase}_steps"] // cfg["sample_steps"]):
+        for k in range(cfg[f"{phase}_steps"] // cfg["sample_steps"]):
+            th = threads[0] if phase == "spin" else threads[k % len(threads)]
+            sim.threads = th  # (given: a scene under SMALL_SCENE elements runs 1 otherwise)
             c0 = time.perf_counter()
             sim.run(steps=cfg["sample_steps"], progress=False)
-            loop += time.perf_counter() - c0
+            loops[phase][th] = loops[phase].get(th, 0.0) + time.perf_counter() - c0
+            steps[phase][th] = steps[phase].get(th, 0) + cfg["sample_steps"]
             frames.append(_frame(sim))
-        loops[phase] = loop
-    n = len(sim.bodies)
     out = series(frames, cfg["length"])
-    out.update({"kind": kind, "threads": threads, "beads": n, "start_seed": st["seed"],
-                "loop_s": loops,
-                "particle_steps_per_s": {ph: n * cfg[f"{ph}_steps"] / loops[ph]
-                                         for ph in loops if loops[ph] > 0},
+    out.update({"kind": kind, "threads": list(threads), "beads": n,
+                "start_seed": st["seed"], "loop_s": loops, "steps": steps,
+                "particle_steps_per_s": {ph: {th: n * steps[ph][th] / loops[ph][th]
+                                              for th in loops[ph]} for ph in loops},
                 "warmup_s": first, "neighbour_rebuilds": sim.rebuild_count,
                 "drum_torque_y_Nm": float(sim.drum.torque[1])})
     return out
 
 
-def worker(kind: str, start_file: str, cfg_json: str, out_file: str) -> None:
-    """:func:`simulate` in its own process (threads from DPM_THREADS), for its peak memory."""
+def worker(kind: str, start_file: str, cfg_json: str, threads: str, out_file: str) -> None:
+    """:func:`simulate` in its own process, for its peak memory; ``threads`` "1" or
+    "1,2"."""
     z = np.load(start_file)
     st = {"position": z["position"], "velocity": z["velocity"], "seed": int(z["seed"])}
     out = simulate(kind, st, json.loads(cfg_json), Path(start_file).with_name("drum.stl"),
-                   int(os.environ.get("DPM_THREADS", "1")))
+                   tuple(int(x) for x in threads.split(",")))
     Path(out_file).write_text(json.dumps(out))
 
 
@@ -307,13 +317,15 @@ def _wait(cmd, cwd, env) -> tuple[str, float, int]:
     return out, wall, usage.ru_maxrss
 
 
-def run_dpm(kind: str, start_file: Path, cfg: dict, threads: int) -> dict:
-    out = start_file.with_name(f"dpm_{kind}_{threads}.json")
+def run_dpm(kind: str, start_file: Path, cfg: dict, threads: tuple = (1,)) -> dict:
+    out = start_file.with_name(f"dpm_{kind}.json")
     _, whole, rss = _wait([sys.executable, __file__, "--worker", kind, str(start_file),
-                           json.dumps(cfg), str(out)], None,
-                          {**os.environ, "DPM_THREADS": str(threads),
-                           "DPM_KERNELS": "scene", "DPM_BACKGROUND_COMPILE": "0"})
+                           json.dumps(cfg), ",".join(map(str, threads)), str(out)], None,
+                          {**os.environ, "DPM_KERNELS": "scene", "DPM_BACKGROUND_COMPILE": "0"})
     d = json.loads(out.read_text())
+    # (JSON keys are strings: the thread counts back to ints)
+    for key in ("loop_s", "steps", "particle_steps_per_s"):
+        d[key] = {ph: {int(th): v for th, v in x.items()} for ph, x in d[key].items()}
     d.update(whole_process_s=whole, max_rss_kb=rss)
     return d
 
@@ -362,13 +374,14 @@ def run_liggghts(start_file: Path, cfg: dict) -> dict | None:
         out, whole, rss = _wait(cmd, tmp, {**os.environ, "OMP_NUM_THREADS": "1"})
         frames = read_dump(t / "drum.dump")
     loops = [float(x) for x in re.findall(r"Loop time of ([0-9.eE+-]+)", out)]
+    builds = [int(x) for x in re.findall(r"Neighbor list builds = (\d+)", out)]
     n = len(st["position"])
     d = series(frames, cfg["length"])
     d.update({"beads": n, "start_seed": st["seed"],
               "loop_s": {"spin": loops[0], "window": loops[1]},
               "particle_steps_per_s": {"spin": n * cfg["spin_steps"] / loops[0],
                                        "window": n * cfg["window_steps"] / loops[1]},
-              "whole_process_s": whole, "max_rss_kb": rss,
+              "whole_process_s": whole, "max_rss_kb": rss, "neighbour_rebuilds": sum(builds),
               "warnings": sorted({ln.strip() for ln in out.splitlines()
                                   if ln.startswith("WARNING")})[:10]})
     return d
@@ -418,6 +431,43 @@ def compare(runs: dict, cfg: dict) -> dict:
     return out
 
 
+def speeds(runs: dict, n: int, cfg: dict) -> dict:
+    """Particle-steps per second per phase: LIGGGHTS (all its runs), dpm per drum and
+    thread count (all intervals run on that count, over both starts), their ratios, and
+    dpm's 2 threads against 1 on the interleaved intervals of start 1 alone."""
+    def total(rs, phase, th=None):
+        steps = time_ = 0.0
+        for r in rs:
+            if th is None:  # LIGGGHTS
+                steps += n * cfg[f"{phase}_steps"]
+                time_ += r["loop_s"][phase]
+            elif th in r["loop_s"][phase]:
+                steps += n * r["steps"][phase][th]
+                time_ += r["loop_s"][phase][th]
+        return steps / time_ if time_ > 0 else None
+
+    lg = {ph: total(runs["liggghts"], ph) for ph in ("spin", "window")} \
+        if runs["liggghts"] else None
+    out = {"liggghts_1_core": lg,
+           "note": "particle-steps/s; dpm 1 thread: the spin-up of both starts, the window "
+                   "of start 2 and every other window interval of start 1; 2 threads: the "
+                   "other window intervals of start 1 (same run, bit-identical results, so "
+                   "the same work under the same load)"}
+    for kind in ("mesh", "tube"):
+        rs = runs[kind]
+        d1 = {ph: total(rs, ph, 1) for ph in ("spin", "window")}
+        d2 = total(rs, "window", 2)
+        out[f"dpm_{kind}_1_thread"] = d1
+        out[f"dpm_{kind}_2_threads_window"] = d2
+        if lg:
+            out[f"{kind}_1_thread_over_liggghts"] = {ph: d1[ph] / lg[ph] for ph in lg}
+            out[f"{kind}_2_threads_over_liggghts_window"] = d2 / lg["window"] if d2 else None
+        if d2:
+            out[f"{kind}_2_over_1_threads_window_start_1"] = (
+                total(rs[:1], "window", 2) / total(rs[:1], "window", 1))
+    return out
+
+
 def plot(result: dict, path: Path) -> None:
     import matplotlib
 
@@ -435,7 +485,7 @@ def plot(result: dict, path: Path) -> None:
         curves.append((r, f"LIGGGHTS start {r['start_seed']}", "0.35", "-", 1.2, k))
     for kind, col in (("mesh", "C0"), ("tube", "C3")):
         for k, d in enumerate(result["runs"][kind]):
-            curves.append((d, f"dpm {kind} start {d['start_seed']} ({d['threads']} thr.)",
+            curves.append((d, f"dpm {kind} start {d['start_seed']}",
                            col, "--", 1.4, k))
     t_spin = result["config"]["spin_steps"] * DT
     for a, (key, label, scale) in zip(ax.ravel()[:5], panels, strict=True):
@@ -447,16 +497,19 @@ def plot(result: dict, path: Path) -> None:
         a.set_ylabel(label)
     ax[0, 0].legend(fontsize=7)
     a = ax[1, 2]
-    names, vals = [], []
-    sp = result["speed_ratios"]
-    for key, lab in (("mesh_1_thread", "mesh 1t"), ("mesh_2_threads", "mesh 2t"),
-                     ("tube_1_thread", "tube 1t"), ("tube_2_threads", "tube 2t")):
-        v = (sp.get(key) or {}).get("window")
-        if v:
-            names.append(lab)
-            vals.append(v)
+    names, vals, cols = [], [], []
+    sp = result["speed"]
+    for kind, col in (("mesh", "C0"), ("tube", "C3")):
+        for key, lab in ((f"{kind}_1_thread_over_liggghts", "1 thread"),
+                         (f"{kind}_2_threads_over_liggghts_window", "2 threads")):
+            v = sp.get(key)
+            v = v.get("window") if isinstance(v, dict) else v
+            if v:
+                names.append(f"{kind}\n{lab}")
+                vals.append(v)
+                cols.append(col)
     if vals:
-        bars = a.bar(range(len(vals)), vals, color=["C0", "C0", "C3", "C3"][:len(vals)])
+        bars = a.bar(range(len(vals)), vals, color=cols)
         a.set_xticks(range(len(vals)), names)
         a.bar_label(bars, labels=[f"{v:.2f}" for v in vals])
         a.axhline(1.0, color="0.5", lw=0.8)
@@ -474,7 +527,7 @@ def main(argv: list[str] | None = None) -> dict:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true", help="12 mm deep drum, 1.2 s")
     p.add_argument("--no-liggghts", action="store_true")
-    p.add_argument("--worker", nargs=4, help=argparse.SUPPRESS)
+    p.add_argument("--worker", nargs=5, help=argparse.SUPPRESS)
     a = p.parse_args(argv)
     if a.worker:
         worker(*a.worker)
@@ -494,10 +547,12 @@ def main(argv: list[str] | None = None) -> dict:
             np.savez(sf, position=st["position"], velocity=st["velocity"], seed=seed)
             if k == 0:  # compile (or load) each step module in a process of its own first
                 for kind in ("mesh", "tube"):
-                    w = run_dpm(kind, sf, {**cfg, "spin_steps": 0, "window_steps": 0}, 1)
+                    w = run_dpm(kind, sf, {**cfg, "spin_steps": 0, "window_steps": 0},
+                                (1, 2) if two else (1,))
                     prep[kind] = {"whole_process_s": w["whole_process_s"],
                                   "max_rss_kb": w["max_rss_kb"]}
-            threads = 2 if k == 1 and two else 1
+            # start 1: the window's intervals on 1 and 2 threads in turn; start 2: 1 thread
+            threads = (1, 2) if k == 0 and two else (1,)
             r = None if a.no_liggghts else run_liggghts(sf, cfg)
             if r is not None:
                 runs["liggghts"].append(r)
@@ -505,28 +560,14 @@ def main(argv: list[str] | None = None) -> dict:
             for kind in ("mesh", "tube"):
                 d = run_dpm(kind, sf, cfg, threads)
                 runs[kind].append(d)
-                print(f"dpm {kind} start {seed}, {threads} thread(s): "
+                print(f"dpm {kind} start {seed}, threads {threads}: "
                       f"{d['particle_steps_per_s']}", flush=True)
             loads.append(os.getloadavg()[0])
     n = runs["mesh"][0]["beads"]
-
-    def rate(rs):
-        return ({ph: float(np.mean([r["particle_steps_per_s"][ph] for r in rs]))
-                 for ph in ("spin", "window")} if rs else None)
-
-    lg = rate(runs["liggghts"])
-    speed = {"liggghts_1_core": lg, "note": "LIGGGHTS: mean of its runs (one per start); "
-             "dpm 1 thread: start A, 2 threads: start B (the same work: the same bead count "
-             "and drum)"}
-    for kind in ("mesh", "tube"):
-        for d in runs[kind]:
-            key = f"{kind}_{d['threads']}_thread{'s' if d['threads'] > 1 else ''}"
-            speed[f"dpm_{key}"] = d["particle_steps_per_s"]
-            if lg:
-                speed[key] = {ph: d["particle_steps_per_s"][ph] / lg[ph] for ph in lg}
+    speed = speeds(runs, n, cfg)
     physics = compare(runs, cfg) if runs["liggghts"] else None
-    mem = {f"dpm_{kind}_{d['threads']}t_kb": d["max_rss_kb"] for kind in ("mesh", "tube")
-           for d in runs[kind]}
+    mem = {f"dpm_{kind}_start_{d['start_seed']}_kb": d["max_rss_kb"]
+           for kind in ("mesh", "tube") for d in runs[kind]}
     if runs["liggghts"]:
         mem["liggghts_kb"] = runs["liggghts"][0]["max_rss_kb"]
     result = {"scene": "rotating drum, half filled", "beads": n, "quick": a.quick,
@@ -545,13 +586,13 @@ def main(argv: list[str] | None = None) -> dict:
               "timing_note": "2-core machine shared with other work while this ran: timings "
                              "are noisy (load average: 1-minute figures sampled between "
                              "runs); dpm after a warm-up that compiles; LIGGGHTS one core",
-              "physics": physics, "speed_ratios": speed, "memory_max_rss": mem,
+              "physics": physics, "speed": speed, "memory_max_rss": mem,
               "dpm_compile_or_load": prep, "runs": runs}
     RESULTS.mkdir(exist_ok=True)
     stem = "drum_peer_quick" if a.quick else "drum_peer"
     (RESULTS / f"{stem}.json").write_text(json.dumps(result, indent=1))
     plot(result, RESULTS / f"{stem}.png")
-    print(json.dumps({"physics": physics, "speed_ratios": speed, "memory": mem}, indent=1))
+    print(json.dumps({"physics": physics, "speed": speed, "memory": mem}, indent=1))
     return result
 
 

@@ -82,7 +82,7 @@ def liggghts(drum):
 def test_drum_against_liggghts(kind, drum, liggghts):
     cfg, st, tmp = drum
     ref, origin = liggghts
-    d = dp.simulate(kind, st, cfg, tmp / "drum.stl", threads=1, warmup=2)
+    d = dp.simulate(kind, st, cfg, tmp / "drum.stl", threads=(1,), warmup=2)
     assert d["beads"] == len(st["position"])  # none escaped
     w = dp.window_means(d, cfg)
     report = {k: (round(w[k]["mean"], 12), ref[k]) for k in REFERENCE}
