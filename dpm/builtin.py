@@ -6,6 +6,7 @@ from .backends.cpu import CpuBackend
 from .boundaries import Bend, Box, Mesh, OrificePlate, Plane, Sieve, Tube, Wall
 from .hookspecs import Register, hookimpl
 from .impact import (
+    JKR,
     HertzBrilliantov,
     HertzMindlin,
     Hooke,
@@ -61,6 +62,7 @@ def dpm_register_impact_models(register: Register) -> None:
     register("hertz_mindlin", HertzMindlin)
     register("walton_braun", WaltonBraun)
     register("linear_cohesion", LinearCohesion)
+    register("jkr", JKR)
 
 
 @hookimpl

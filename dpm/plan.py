@@ -142,6 +142,8 @@ def _law_modules(laws) -> set[str]:
     for law in map(_resolve, laws):
         if hasattr(law, "parts"):
             mods |= {p.target()[0] for p in law.parts}
+            mods |= {t[0] for p in law.parts
+                     if (t := getattr(p, "attached_target", lambda: None)()) is not None}
         else:
             mods.add(law[0])
     return mods
@@ -244,10 +246,20 @@ def _laws(laws) -> tuple[list[str], list[str]]:
     if any(not hasattr(law, "parts") for law in laws):
         imports.append("from .rolling import rolling_torque")
     body = ["", f"ROLLING = {rolling}"]
+    attached: dict[int, str] = {}  # law -> its pair_attached call
     for k, law in enumerate(laws):
         i, b = _composed(k, law) if hasattr(law, "parts") else _monolithic(k, law)
         imports += i
         body += b
+        normal = next((p for p in getattr(law, "parts", ()) if p.kind == "normal"), None)
+        target = normal.attached_target() if normal is not None else None
+        if target is not None:
+            imports.append(f"from {target[0]} import {target[1]} as attached_{k}")
+            idx = law.layout.indices(normal)
+            q = "(" + ", ".join(f"p[{i}]" for i in idx) + ("," if len(idx) == 1 else "") + ")"
+            attached[k] = (f"attached_{k}({q}, delta, reff, hist, k, "
+                           f"{law.layout.offset.get('normal', 0)})")
+    body += attached_lines(attached, len(laws))
     for name, args, doc in (("pair_force", _LAW_ARGS, "F_n, F_t, rolling torque"),
                             ("pair_normal", _NORMAL_ARGS, "the normal force F_n")):
         call = "law" if name == "pair_force" else "normal_law"
@@ -260,6 +272,24 @@ def _laws(laws) -> tuple[list[str], list[str]]:
             body += _wrap(f"return {call}_{k}", args, "        ")
         body += _wrap(f"return {call}_{len(laws) - 1}", args)
     return imports, body
+
+
+def attached_lines(attached: dict[int, str], nlaws: int) -> list[str]:
+    """``RANGED`` (whether a law keeps contacts at a separation) and
+    ``pair_attached(model, p, delta, reff, hist, k)``: whether a listed pair at negative
+    overlap is in contact (the normal part's ``attached`` call; False for the others)."""
+    body = ["", f"RANGED = {bool(attached)}", "", "", "@inline_jit",
+            "def pair_attached(model, p, delta, reff, hist, k):",
+            '    """Whether a pair at negative overlap ``delta`` is in contact (laws with an '
+            'interaction range)."""']
+    for k, call in attached.items():
+        if len(attached) == nlaws and k == max(attached):
+            body.append(f"    return {call}")
+            return body
+        body.append(f"    if model == {k}:")
+        body.append(f"        return {call}")
+    body.append("    return False")
+    return body
 
 
 def law_lines(laws) -> list[str]:
@@ -393,11 +423,12 @@ class ScenePlan:
     the contact laws in use and the material-pair tables (``pair_model[a, b]`` picks the
     law, ``pair_params[a, b, :]`` its constants), the history width per contact, the
     integrator's kernel module, the boundary kinds present, whether axes are periodic,
-    whether a boundary moves and whether every body is a single sphere at its centre."""
+    whether a boundary moves, whether every body is a single sphere at its centre, and the
+    interaction range of laws that act at a separation."""
 
     def __init__(self, laws: list[tuple[str, str]], pair_model, pair_params,
                  history_width: int, integrator_module: str, kinds: list[int],
-                 periodic: bool, moving: bool, spheres_only: bool) -> None:
+                 periodic: bool, moving: bool, spheres_only: bool, reach: float = 0.0) -> None:
         self.laws = laws
         self.pair_model = pair_model
         self.pair_params = pair_params
@@ -407,6 +438,9 @@ class ScenePlan:
         self.periodic = periodic
         self.moving = moving
         self.spheres_only = spheres_only
+        #: how far beyond touching [m] a law keeps contacts (the largest
+        #: :meth:`dpm.impact.parts.NormalPart.reach`; 0: touching only)
+        self.reach = float(reach)
         #: (laws, history width) bool: history floats negated when a pair swaps
         self.history_flips = history_flips(laws, history_width)
 

@@ -33,7 +33,7 @@ from .errors import ParameterError
 from .flow import Inlet, Outlet
 from .guards import EnergyBook, Escaped, Guards
 from .impact.base import ImpactModel, PairContext
-from .impact.parts import pack_tables
+from .impact.parts import contact_reach, pack_tables
 from .material import Material
 from .measures import to_body as _to_body  # noqa: F401  (used by tests and scripts)
 from .motion import frames
@@ -726,10 +726,16 @@ class Simulation:
         laws, pair_model, pair_params, width = self._pair_tables(report)
         if self._skin is None:
             self._skin = 0.4 * float(self.elements.radius.min())
+        rmax = float(self.elements.radius.max())
+        reach = contact_reach(self._contacts, self.materials, rmax)  # (JKR: |d_c|)
+        if reach > 0.0 and self.integrator.implicit:
+            raise ParameterError(f"Simulation(integrator={self.integrator.name!r}): a contact "
+                                 "law acts at a separation (JKR), which the implicit "
+                                 "integrators do not support; choose an explicit one")
         # boundaries: pipe joints, primitives, frames, search grids
         join_pipe_ends(self.boundaries)
         self.walls = BoundaryTable(self.boundaries, lambda m: self._material_index(m, ""),
-                                   float(self.elements.radius.max()) + self._skin)
+                                   rmax + self._skin + reach)
         spheres = population.spheres_only(self)
         if spheres:  # every body one sphere at its centre: element positions are the bodies'
             population.share_sphere_arrays(self)
@@ -737,7 +743,7 @@ class Simulation:
         self.plan = _plan.ScenePlan(
             laws, pair_model, pair_params, width, self.integrator.kernel_module,
             sorted(set(self.walls.kind.tolist())), periodic,
-            any(bd.motion is not None for bd in self.boundaries), spheres)
+            any(bd.motion is not None for bd in self.boundaries), spheres, reach)
         scene_check.check_period(self)
         for k, bd in enumerate(self.boundaries):
             self.walls.set_enabled(k, bd.enabled)

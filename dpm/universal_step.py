@@ -40,7 +40,8 @@ WIDTH = 16
 def builtin_parts() -> dict[str, tuple]:
     """The parts of dpm's own impact models, per kind, in a fixed order (their codes:
     the index in the kind's tuple; 0 means "none" for the optional kinds, whose parts
-    start at 1)."""
+    start at 1). Parts marked ``universal = False`` (JKR's: wider rows, detection at a
+    separation) are left out: their scenes compile their own module."""
     from .impact.parts import Part
     from .plugins import registry
 
@@ -53,7 +54,8 @@ def builtin_parts() -> dict[str, tuple]:
         parts = [cls.normal, cls.tangential, cls.adhesion,
                  *getattr(cls, "rolling_parts", {}).values()]
         for p in parts:
-            if isinstance(p, Part) and p.target()[0].startswith("dpm."):
+            if (isinstance(p, Part) and p.target()[0].startswith("dpm.")
+                    and getattr(p, "universal", True)):
                 found[p.kind].setdefault(p.key(), p)
     out = {}
     for kind in KINDS:
@@ -184,7 +186,14 @@ def law_lines() -> list[str]:
              '    """The normal force F_n of the parts the row\'s codes name."""',
              *offsets, "    fn = 0.0", "    kn = 0.0", *chain("normal", 0, call),
              *chain("adhesion", 2, call), "    return fn"]
-    return imports + body
+    return imports + body + plan_attached_lines()
+
+
+def plan_attached_lines() -> list[str]:
+    """No universal part acts at a separation: ``RANGED`` False, ``pair_attached`` False."""
+    from .plan import attached_lines
+
+    return attached_lines({}, 1)
 
 
 def universal_module(integrator_module: str) -> ModuleType:

@@ -6,8 +6,8 @@
 
 Rank 0 writes the end state by body id (position, velocity, angular velocity,
 orientation), the boundary loads, the outlet records and, per call, each rank's owned
-bodies and step time. Every scene uses Hertz-Mindlin and velocity Verlet (the step modules
-the rest of the suite compiles).
+bodies and step time. Every scene but ``sticky`` (JKR) uses Hertz-Mindlin and velocity
+Verlet (the step modules the rest of the suite compiles).
 
 Scenes:
 
@@ -21,6 +21,7 @@ Scenes:
 - ``flow``: periodic along x (the cut axis), an inlet, an outlet: count balance.
 - ``gather``: spheres pulled into one corner of a box by a slanted gravity: the cut
   follows them.
+- ``sticky``: JKR contacts kept beyond touching across x = 0 (the ghost layer's reach).
 """
 
 from __future__ import annotations
@@ -173,8 +174,33 @@ def gather(kind: str, rebalance: float = 1.1):
     return sim, 8000
 
 
+def sticky(kind: str):
+    """JKR pairs across x = 0 with a skin far thinner than the neck: a light sphere
+    bouncing on a heavy one at the face, attached beyond touching (only the ghost layer's
+    extra reach shows the pair to the heavy sphere's rank), and a pair that parts."""
+    sim = dpm.Simulation(dt=1e-7, gravity=(0.0, 0.0, 0.0), device=device(kind, True),
+                         dt_check="off")
+    putty = dpm.Material("putty", density=2500.0, young=1e7, poisson=0.3)
+    heavy = dpm.Material("heavy", density=250000.0, young=1e7, poisson=0.3)
+    for a, b in ((putty, putty), (putty, heavy), (heavy, heavy)):
+        sim.contact(a, b, model="jkr", restitution=0.9, friction=0.5, work_of_adhesion=0.1)
+    sim.skin = 1e-7
+    r = 1e-3
+    # the heavy sphere's centre 0.2 um right of the face, the light one touching it from
+    # the left and leaving at 0.9 of the sticking speed (6.1 mm/s for this pair)
+    sim.add_particles("sphere", material=heavy, radius=r, positions=[[2e-7, 0.0, 0.0]])
+    sim.add_particles("sphere", material=putty, radius=r,
+                      positions=[[2e-7 - 2 * r + 5e-8, 0.0, 0.0]],
+                      velocities=[[-0.9 * 6.1e-3, 0.0, 0.0]])
+    # a pair across the face parting at twice the sticking speed, obliquely
+    sim.add_particles("sphere", material=putty, radius=r,
+                      positions=[[-r + 3e-8, 5e-3, 0.0], [r - 3e-8, 5e-3, 0.0]],
+                      velocities=[[-0.009, 0.002, 0.0], [0.009, -0.002, 0.0]])
+    return sim, 3000
+
+
 SCENES = {"settle": settle, "corner": corner, "slide": slide, "flow": flow,
-          "gather": gather}
+          "gather": gather, "sticky": sticky}
 
 
 def tilt_gravity(sim: dpm.Simulation) -> None:

@@ -225,7 +225,7 @@ class CpuBackend:
                              plan.pair_model,
                              plan.pair_params if self._universal_params is None
                              else self._universal_params, sim.period,
-                             len(b) - b.ghosts)
+                             len(b) - b.ghosts, float(getattr(plan, "reach", 0.0)))
         bodies = BodyArrays(b.position, b.velocity, b.orientation, b.angular_velocity,
                             b.force, b.torque, b.mass, b.invmass, b.invinertia, self.vf,
                             self.wf, self.aux, b.element_start)

@@ -31,7 +31,7 @@ Design (as :mod:`dpm.parallel.backend` for MPI):
   the device's libm change the last bits (the contract's tolerances cover this).
 
 Refused with a clear error: implicit integrators (their Newton iterations run on the
-host). Float64 throughout.
+host) and contact laws that act at a separation (JKR). Float64 throughout.
 """
 
 from __future__ import annotations
@@ -188,6 +188,10 @@ class CudaBackend(CpuBackend):
                                  f"{sim.integrator.name} integrator is not supported on "
                                  "the GPU (its Newton iterations run on the host); choose "
                                  "an explicit one")
+        if float(getattr(sim.plan, "reach", 0.0)) > 0.0:
+            raise ParameterError("Simulation(device='cuda'): a contact law acts at a "
+                                 "separation (JKR), which the GPU step does not support yet; "
+                                 "run it on the CPU")
         if not self.sync_lists and (sim.inlets or sim.outlets):
             raise ParameterError("CudaBackend(sync_lists=False): the scene has inlets or "
                                  "outlets, whose events change the contact lists on the "

@@ -52,8 +52,10 @@ BoundaryArrays = namedtuple("BoundaryArrays", ["kind", "par", "owner", "material
 #: [0:3], period [3:6], 0 = not periodic); ``n_owned``: bodies [0, n_owned) are owned
 #: and integrated, the rest are ghosts (copies of bodies owned elsewhere: their elements
 #: take part in the contacts, their force and torque sums are what they receive here, to
-#: be handed back to their owners; :attr:`dpm.state.Bodies.ghosts`)
+#: be handed back to their owners; :attr:`dpm.state.Bodies.ghosts`); ``reach`` [m]: how far
+#: beyond touching a contact law keeps contacts (JKR's |d_c|; 0: touching only), by which
+#: the neighbour and boundary lists extend
 SceneConstants = namedtuple("SceneConstants", ["gravity", "skin", "max_overlap",
                                                "update_elements", "fused", "spin_only",
                                                "pair_model", "pair_params", "period",
-                                               "n_owned"])
+                                               "n_owned", "reach"], defaults=(0.0,))

@@ -71,6 +71,10 @@ class Part:
     history_flips: ClassVar[bool] = False
     function: ClassVar[Any] = ("", "")
     needs_elastic_constants: ClassVar[bool] = False
+    #: whether the universal step module (:mod:`dpm.universal_step`) carries this part
+    #: (a part whose constants do not fit its region, or that needs detection beyond
+    #: touching, compiles a scene's own module instead)
+    universal: ClassVar[bool] = True
 
     def values(self, model: ImpactModel, a: Material, b: Material,
                context: PairContext) -> tuple[float, ...]:
@@ -88,8 +92,9 @@ class Part:
 
     def key(self) -> tuple:
         """What makes two parts compile to the same code."""
+        extra = getattr(self, "attached_target", lambda: None)()
         return (self.kind, type(self).__qualname__, self.target(), tuple(self.slots),
-                int(self.history))
+                int(self.history)) + ((extra,) if extra else ())
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"
@@ -101,6 +106,25 @@ class NormalPart(Part):
     stiffness a tangential part may scale with."""
 
     kind = "normal"
+    #: a part that keeps contacts at a separation (an interaction range): its numba
+    #: ``f(q, delta, reff, hist, k, h) -> bool``, asked for a listed pair at negative
+    #: overlap whether it is still in contact (None: a pair touches only at delta > 0)
+    attached: ClassVar[Any] = None
+
+    def reach(self, model: ImpactModel, a: Material, b: Material, rmax: float) -> float:
+        """How far beyond touching [m] this part can keep a contact between materials
+        ``a`` and ``b`` of elements at most ``rmax`` in radius (0: touching only). The
+        neighbour search, the boundary search and the MPI halo extend by the scene's
+        largest."""
+        return 0.0
+
+    def attached_target(self) -> tuple[str, str] | None:
+        """(module, name) of the ``attached`` function, or None."""
+        f = self.attached
+        if f is None or isinstance(f, tuple):
+            return f
+        py = getattr(f, "py_func", f)
+        return py.__module__, py.__name__
 
     def contact_time(self, model: ImpactModel, a: Material, b: Material, meff: float,
                      reff: float, speed: float) -> float:
@@ -270,3 +294,14 @@ def pack_tables(contacts: dict, materials: list, context_of) -> tuple:
     for (ia, ib), r in rows.items():
         pair_params[ia, ib, :len(r)] = r
     return laws, pair_model, pair_params, max(widths)
+
+
+def contact_reach(contacts: dict, materials: list, rmax: float) -> float:
+    """The scene's interaction range beyond touching [m]: the largest
+    :meth:`NormalPart.reach` of the laws of its material pairs (0 for touching-only laws)."""
+    out = 0.0
+    for (ia, ib), law in contacts.items():
+        normal = getattr(law, "normal", None)
+        if normal is not None:
+            out = max(out, float(normal.reach(law, materials[ia], materials[ib], rmax)))
+    return out

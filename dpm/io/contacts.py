@@ -88,7 +88,7 @@ def _evaluated_rows(sim: Any) -> np.ndarray:
                              sim.max_overlap, not plan.spheres_only, 0,
                              plan.spheres_only and not sim.sphere_orientation,
                              plan.pair_model, plan.pair_params, sim.period,
-                             len(b) - b.ghosts)
+                             len(b) - b.ghosts, float(getattr(plan, "reach", 0.0)))
     bodies = rec.BodyArrays(b.position, b.velocity, b.orientation, b.angular_velocity,
                             b.force.copy(), b.torque.copy(), b.mass, b.invmass,
                             b.invinertia, vf, wf, np.zeros((len(b), 0)), b.element_start)

@@ -319,7 +319,7 @@ def element_contacts(i, dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, 
         state, delta, rmin, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz = pair_contact(
             kk, nl_j[kk], xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_invmass,
             e_owner, e_radius, e_mat, e_pos, nl_hist, nl_active, pair_model, pair_params,
-            period)
+            period, 0.0)  # (no interaction range: the CUDA backend refuses JKR)
         if state == 1:
             count += 1
             if delta > worst * rmin:
@@ -342,7 +342,7 @@ def element_contacts(i, dt, b_pos, b_vel, b_angvel, b_mass, b_invmass, e_owner, 
     wcount, wworst = boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel,
                                        b_mass, b_invmass, wl_start, wl_w, wl_hist, wl_active,
                                        wl_f, wl_tag, w_kind, w_par, w_owner, w_mat, w_ids,
-                                       f_cur, pair_model, pair_params)
+                                       f_cur, pair_model, pair_params, 0.0)
     e_worst[i] = max(worst, wworst)
     e_count[i] = count + wcount
 

@@ -117,6 +117,15 @@ def pair_normal(model, p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k):
     if model == 0:
         return normal_law_0(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k)
     return normal_law_1(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k)
+
+RANGED = False
+
+
+@inline_jit
+def pair_attached(model, p, delta, reff, hist, k):
+    """Whether a pair at negative overlap ``delta`` is in contact (laws with an interaction
+    range)."""
+    return False
 # --- bindings end ---
 
 STATUS_OK = 0
@@ -274,13 +283,16 @@ def add_row(rows, q, fx, fy, fz, tx, ty, tz):
 
 @inline_jit
 def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_invmass, e_owner,
-                 e_radius, e_mat, e_pos, nl_hist, nl_active, pair_model, pair_params, period):
+                 e_radius, e_mat, e_pos, nl_hist, nl_active, pair_model, pair_params, period,
+                 reach):
     """Contact force of listed pair ``kk`` (element i at xi, yi, zi with radius ri, body bi,
     material mi; partner element j).
 
     Returns (state, overlap, smaller radius, F on i, torque on body(i), torque on body(j));
-    state 1 touching, 0 not touching, 2 it stopped touching in this call (its history was
-    cleared; the caller clears its force row).
+    state 1 in contact, 0 not, 2 it stopped being in contact in this call (its history was
+    cleared; the caller clears its force row). In contact: overlapping, or (``RANGED``, a
+    law with an interaction range: a constant of the scene) within ``reach`` of touching
+    and still attached by the law (``pair_attached``).
     """
     dx = xi - e_pos[j, 0]
     dy = yi - e_pos[j, 1]
@@ -294,9 +306,14 @@ def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_in
     d2 = dx * dx + dy * dy + dz * dz
     ims = 0.0
     bj = bi
-    if d2 < rs * rs:  # only touching pairs read the partner's body
+    rr = rs + reach if RANGED else rs
+    if d2 < rr * rr:  # only touching pairs read the partner's body
         bj = e_owner[j]
         ims = b_invmass[bi] + b_invmass[bj]
+        if RANGED and d2 >= rs * rs and ims != 0.0:  # apart: is it still attached?
+            if not pair_attached(pair_model[mi, e_mat[j]], pair_row(pair_params, mi, e_mat[j]),
+                                 rs - math.sqrt(d2), ri * rj / rs, nl_hist, kk):
+                ims = 0.0
     if ims == 0.0:
         state = 0
         if nl_active[kk]:  # it stopped touching: clear its history
@@ -368,13 +385,14 @@ def pair_contact(kk, j, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_in
 @inline_jit
 def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_mass,
                       b_invmass, wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag, w_kind,
-                      w_par, w_owner, w_mat, w_ids, f_cur, pair_model, pair_params):
+                      w_par, w_owner, w_mat, w_ids, f_cur, pair_model, pair_params, reach):
     """Element-boundary contacts of element i, each in its boundary's frame, stored per
     row: wl_f[q] = (F, torque on the body, torque on the boundary about its frame origin);
     rows of entries that do not touch are zeroed. Returns (touching entries, largest
     overlap / radius). The boundary arrays come unpacked from ``bnd`` (the caller unpacks
     them once: taking an array out of a tuple costs numba a reference count, two atomic
-    operations, each time)."""
+    operations, each time). ``RANGED``: an entry within ``reach`` of touching is in contact
+    while its law keeps it attached (``pair_attached``)."""
     nh = wl_hist.shape[1]
     count = 0
     worst = 0.0
@@ -388,7 +406,7 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
                 meshes = True
                 lx, ly, lz = to_local(f_cur[w_owner[w]], xi, yi, zi)
                 dist, _, _, _, feature = closest(TRIANGLE, w_par[w], lx, ly, lz, ri)
-                wl_tag[q] = feature if dist < ri else -1
+                wl_tag[q] = feature if dist < (ri + reach if RANGED else ri) else -1
         if meshes:
             resolve_triangle_contacts(q0, q1, wl_w, wl_tag, w_kind, w_owner, w_ids,
                                       w_par, wl_active, wl_hist)
@@ -401,7 +419,11 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
         f = row18(f_cur, w_owner[w])  # (tuples: no reference counts per entry)
         lx, ly, lz = to_local(f, xi, yi, zi)
         dist, lnx, lny, lnz, feature = closest(kind, row20(w_par, w), lx, ly, lz, ri)
-        if (not touching(kind, dist, ri) or (kind == TRIANGLE and wl_tag[q] < 0)
+        touch = touching(kind, dist, ri)
+        if RANGED and not touch and touching(kind, dist, ri + reach):  # still attached?
+            touch = pair_attached(pair_model[mi, w_mat[w]], pair_row(pair_params, mi, w_mat[w]),
+                                  ri - dist, ri, wl_hist, q)
+        if (not touch or (kind == TRIANGLE and wl_tag[q] < 0)
                 or feature == JOINED or b_invmass[bi] == 0.0):
             if wl_active[q]:
                 for c in range(nh):
@@ -506,6 +528,7 @@ def contact_pass(dt, ctl, bodies, elems, pairs, walls, bnd):
     wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag = (walls.start, walls.key, walls.hist,
                                                         walls.active, walls.force, walls.tag)
     pair_model, pair_params, period = ctl.pair_model, ctl.pair_params, ctl.period
+    reach = ctl.reach
     w_kind, w_par, w_owner, w_mat, w_ids, f_cur = (bnd.kind, bnd.par, bnd.owner, bnd.material,
                                                    bnd.ids, bnd.frame)
     for i in prange(e_pos.shape[0]):
@@ -521,7 +544,7 @@ def contact_pass(dt, ctl, bodies, elems, pairs, walls, bnd):
             state, delta, rmin, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz = pair_contact(
                 kk, nl_j[kk], xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_invmass,
                 e_owner, e_radius, e_mat, e_pos, nl_hist, nl_active, pair_model,
-                pair_params, period)
+                pair_params, period, reach)
             if state == 1:
                 count += 1
                 if delta > worst * rmin:  # (a division only for a new largest)
@@ -545,7 +568,7 @@ def contact_pass(dt, ctl, bodies, elems, pairs, walls, bnd):
                                            b_angvel, b_mass, b_invmass, wl_start, wl_w,
                                            wl_hist, wl_active, wl_f, wl_tag, w_kind, w_par,
                                            w_owner, w_mat, w_ids, f_cur, pair_model,
-                                           pair_params)
+                                           pair_params, reach)
         e_worst[i] = max(worst, wworst)
         e_count[i] = count + wcount
 
@@ -612,6 +635,7 @@ def fused_pass(dt, integrate, ctl, bodies, elems, pairs, walls, bnd):
     wl_start, wl_w, wl_hist, wl_active, wl_f, wl_tag = (walls.start, walls.key, walls.hist,
                                                         walls.active, walls.force, walls.tag)
     pair_model, pair_params, period = ctl.pair_model, ctl.pair_params, ctl.period
+    reach = ctl.reach
     w_kind, w_par, w_owner, w_mat, w_ids, f_cur = (bnd.kind, bnd.par, bnd.owner, bnd.material,
                                                    bnd.ids, bnd.frame)
     nchunks = ctl.fused
@@ -644,7 +668,7 @@ def fused_pass(dt, integrate, ctl, bodies, elems, pairs, walls, bnd):
                 state, delta, rmin, px, py, pz, tix, tiy, tiz, tjx, tjy, tjz = pair_contact(
                     kk, j, xi, yi, zi, ri, i, mi, dt, b_pos, b_vf, b_wf, b_invmass, e_owner,
                     e_radius, e_mat, e_pos, nl_hist, nl_active, pair_model, pair_params,
-                    period)
+                    period, reach)
                 if state != 1:
                     continue
                 count += 1
@@ -674,7 +698,7 @@ def fused_pass(dt, integrate, ctl, bodies, elems, pairs, walls, bnd):
                                                b_mass, b_invmass, wl_start, wl_w, wl_hist,
                                                wl_active, wl_f, wl_tag, w_kind, w_par,
                                                w_owner, w_mat, w_ids, f_cur, pair_model,
-                                               pair_params)
+                                               pair_params, reach)
             if wcount > 0:
                 for q in range(wl_start[i], wl_start[i + 1]):
                     fx, fy, fz, tx, ty, tz = add_row(wl_f, q, fx, fy, fz, tx, ty, tz)
@@ -833,7 +857,8 @@ def run_steps(nsteps, dt, ctl, bodies, elems, pairs, walls, bnd, diag, f_table):
 def rebuild(ctl, bodies, elems, pairs, walls, bnd, diag):
     """Rebuild both lists; on overflow set the status and the needed size, change
     nothing."""
-    skin = ctl.skin
+    # a law with an interaction range keeps contacts up to ctl.reach beyond touching
+    skin = ctl.skin + ctl.reach
     e_pos, e_radius, e_ref = elems.pos, elems.radius, elems.ref
     nl_j = pairs.key
     need = build_neighbour_list(e_pos, e_radius, elems.owner, skin, pairs.start, nl_j,

@@ -298,7 +298,8 @@ class MpiBackend(CpuBackend):
     # ------------------------------------------------------------------ scatter
     def _layer(self) -> float:
         sim = self.sim
-        return 2.0 * float(sim.elements.radius.max()) + float(sim.skin)
+        reach = float(getattr(getattr(sim, "plan", None), "reach", 0.0))  # (JKR's |d_c|)
+        return 2.0 * float(sim.elements.radius.max()) + float(sim.skin) + reach
 
     def _body_extent(self, estart: np.ndarray, offset: np.ndarray,
                      radius: np.ndarray) -> np.ndarray:

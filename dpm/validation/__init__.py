@@ -99,7 +99,7 @@ def all_models() -> list[str]:
 
 
 def _load() -> None:
-    from . import analytic, chung_ooi  # noqa: F401  (they register their cases)
+    from . import analytic, chung_ooi, jkr  # noqa: F401  (they register their cases)
 
 
 def run(cases: Sequence[str] | None = None, quick: bool = False,
