@@ -304,8 +304,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="only this integrator (repeatable)")
     ad.add_argument("--model", action="append", default=None, metavar="NAME",
                     help="only this impact model ('as set': the scene's own; repeatable)")
-    ad.add_argument("--max-rayleigh", type=float, default=1.0,
-                    help="largest step as a fraction of the Rayleigh step (default 1)")
+    ad.add_argument("--max-rayleigh", type=float, default=0.3,
+                    help="largest step as a fraction of the Rayleigh step (default 0.3)")
     ad.add_argument("--json", default=None, metavar="FILE", help="also write the advice "
                     "as JSON")
     ad.set_defaults(func=_cmd_advise)

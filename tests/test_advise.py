@@ -34,8 +34,8 @@ def small_box(n: int = 3, restitution: float = 0.3, radius: float = 1e-3,
     sim.add_boundary("box", material=glass, lower=(0, 0, 0), upper=(side, side, 3 * side),
                      open=("+z",))
     pitch = side / n
-    xyz = dpm.lattice((0.5 * pitch, 0.5 * pitch, 0.5 * pitch),
-                      (side - 0.4 * pitch, side - 0.4 * pitch, side - 0.4 * pitch), pitch)
+    xyz = dpm.lattice((0.0, 0.0, 0.0), (side, side, side), pitch)
+    assert len(xyz) == n**3
     if shape == "sphere":
         sim.add_particles("sphere", material=glass, radius=radius, positions=xyz)
     else:
@@ -64,7 +64,9 @@ def test_shipped_tables_are_there_and_complete():
         assert key in t.cost
     for q in ("settled_height", "angle_of_repose", "discharge_rate"):
         s = t.sensitivity(q)
-        assert s is not None and s["restitution"] > 0, q
+        assert s is not None and len(s["points"]) >= 2, q
+        assert all(p["steps_per_contact"] >= 5 for p in s["points"]), q
+        assert 0 <= s["scatter"] < 1 and s["contact"]["model"] == "hertz_mindlin", q
 
 
 def test_envelope_never_grows_with_finer_steps():
@@ -80,7 +82,8 @@ def test_envelope_never_grows_with_finer_steps():
 
 def synthetic(tmp_path: Path, c: float = 0.1, p: float = 2.0) -> str:
     """The shipped tables with every contact error replaced by a known law: restitution
-    error c (10/n)^p, no duration or overlap error, S_e = 1 for settled_height."""
+    error c (10/n)^p, no duration or overlap error, no calibration of settled_height (it
+    errs as its contacts' restitution)."""
     data = json.loads(DATA.read_text())
     ns = [2, 5, 10, 20, 50, 100, 200]
     for integ in data["contact"].values():
@@ -88,16 +91,15 @@ def synthetic(tmp_path: Path, c: float = 0.1, p: float = 2.0) -> str:
             for e in model:
                 model[e] = {"n": ns, "restitution": [c * (10 / n) ** p for n in ns],
                             "duration": [0.0] * len(ns), "max_overlap": [0.0] * len(ns)}
-    data["sensitivity"]["settled_height"] = {"restitution": 1.0, "scatter": 0.0,
-                                             "scene": "synthetic"}
+    data["sensitivity"].pop("settled_height", None)
     path = tmp_path / "synthetic.json"
     path.write_text(json.dumps(data))
     return str(path)
 
 
 def test_step_follows_a_known_error_law(box, tmp_path):
-    """With E_e(n) = 0.1 (10/n)^2 and S_e = 1, a tolerance of 0.1 % needs n = 100 steps
-    per contact: dt = T/100 (the search's only freedom here)."""
+    """With E_e(n) = 0.1 (10/n)^2 (and the quantity erring as that), a tolerance of 0.1 %
+    needs n = 100 steps per contact: dt = T/100 (the search's only freedom here)."""
     tables = synthetic(tmp_path)
     a = advise(box, tolerance=0.001, quantity="settled_height", tables=tables,
                integrators=["velocity_verlet"], models=["as set"])
@@ -108,8 +110,8 @@ def test_step_follows_a_known_error_law(box, tmp_path):
     assert a.choice.error == pytest.approx(0.001, rel=1e-3)
     # 50 %: n >= 4.5 would do; the engine's least steps per contact (5) binds first
     a = advise(box, tolerance=0.5, quantity="settled_height", tables=tables,
-               integrators=["velocity_verlet"], models=["as set"])
-    assert a.choice.steps_per_contact == pytest.approx(5.0, rel=1e-6)
+               integrators=["velocity_verlet"], models=["as set"], max_rayleigh=1.0)
+    assert a.choice.steps_per_contact == pytest.approx(5.05, rel=1e-6)  # 1 % inside
     assert "steps per contact" in a.choice.limited_by
 
 
@@ -159,7 +161,7 @@ def test_choice_is_cheaper_than_a_fine_default_and_reports_its_parts(box):
     assert a.speedup > 1.0
     text = str(a)
     for word in ("choice:", "default:", "predicted error", "s per simulated second",
-                 "assumptions:", "S_e"):
+                 "assumptions:", "steps per contact against 80"):
         assert word in text
     assert "hertz_mindlin" in text or "as set" in text
 

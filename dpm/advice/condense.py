@@ -113,9 +113,9 @@ def _shapes(src: dict) -> tuple[dict, float]:
 
 def _sensitivity(src: dict) -> dict:
     out = {}
-    for q, s in src.get("sensitivity", {}).items():
-        out[q] = {k: s[k] for k in ("restitution", "restitution_measured", "scatter", "bodies",
-                                    "scene", "delta_restitution") if k in s}
+    for q, s in src.get("calibration", {}).items():
+        out[q] = {k: s[k] for k in ("points", "contact", "scatter", "bodies", "scene")
+                  if k in s}
     return out
 
 

@@ -3,19 +3,29 @@
 Error of the quantity Q for a set-up (integrator I, impact model m, step dt, shape
 resolution rho), the sum of three parts taken as independent upper bounds:
 
-    eps_Q = max_p [ S_e E_e(I, m, e_p, n_p) + (d_p/R_p) max(E_T, E_d)(I, m, e_p, n_p) ]
-          + max_p (d_p/R_p) max(|T'/T - 1|, |d'/d - 1|, |kappa'/kappa - 1|)      (m not the scene's)
+    eps_Q = max_p [ Q_cal(n_p) max(1, E_e(I, m, e_p, n_p) / E_e,cal(n_p))
+                    + (d_p/r_p) max(E_T, E_d)(I, m, e_p, n_p) ]
+          + max_p (d_p/r_p) max(|T'/T - 1|, |d'/d - 1|, |kappa'/kappa - 1|)      (m not the scene's)
           + S_shape dev_rms(rho)
 
 over the material pairs p that can meet: n_p = T_p/dt steps resolve pair p's contact of
-duration T_p at the impact speed v; E_e, E_T, E_d are the tables' relative errors of one
-collision's restitution, duration and largest overlap at n_p steps (mean over the contact's
-start within a step, made monotone in n: E(n) = max over n' >= n); d_p/R_p = (15 m* v^2 /
-(16 E* sqrt(R*)))^(2/5) / r is Hertz's largest overlap over the smaller body's radius, the
-weight with which a stiffness or duration error moves lengths; S_e the quantity's measured
-sensitivity to the restitution (d ln Q / d ln e); T', d', kappa' the duration, overlap and
-tangential over normal stiffness of the replacing law against Hertz-Mindlin's; dev_rms the clustered
-shape's RMS surface deviation over its equal-volume radius.
+duration T_p at the impact speed v. Q_cal(n) is the quantity's own relative error measured
+on a calibration scene of its kind at a few steps per contact n_i against a run at 80
+(``benchmarks/advise.py``; the run-to-run scatter added: an upper bound), made a step
+function that never grows with n: between n_i and n_i+1 the largest error measured at n_i
+or finer, first order beyond the finest, and below the coarsest scaled by the contacts'
+restitution error. It carries every way the step reaches the quantity (dissipation, the
+tangential spring, the settling dynamics). E_e, E_T, E_d are the tables' relative errors of
+one collision's restitution, duration and largest overlap at n steps for integrator I,
+model m and the pair's restitution e_p (mean over the contact's start within a step, made
+monotone in n: E(n) = max over n' >= n); E_e,cal the same for the calibration scene's
+integrator, model and restitution: a scene whose contacts err more than the calibration's
+at the same steps gets that much more error, one whose contacts err less is given no
+credit for it. d_p/r_p = (15 m* v^2 / (16 E* sqrt(R*)))^(2/5) / r is Hertz's largest overlap
+over the smaller body's radius, the weight with which a stiffness or duration error moves
+lengths; T', d', kappa' the duration, overlap and tangential over normal stiffness of the
+replacing law against Hertz-Mindlin's; dev_rms the clustered shape's RMS surface deviation
+over its equal-volume radius.
 
 Cost per simulated second (one thread), wall seconds:
 
@@ -89,11 +99,18 @@ class Prediction:
 class Model:
     """Error and cost model of one scene and quantity (see the module docstring)."""
 
-    def __init__(self, facts: SceneFacts, tables: Tables, sensitivity: float,
-                 coordination: float | None = None, max_rayleigh: float = 1.0) -> None:
+    def __init__(self, facts: SceneFacts, tables: Tables, calibration: dict | None,
+                 coordination: float | None = None, max_rayleigh: float = 0.3) -> None:
         self.f = facts
         self.t = tables
-        self.S = float(sensitivity)
+        #: the quantity's calibration (None: its error is its contacts' restitution error)
+        self.cal = calibration
+        if calibration is not None:
+            sig = math.sqrt(2) * float(calibration.get("scatter", 0.0))
+            pts = sorted((float(p["steps_per_contact"]), float(p["measured_error"]) + sig)
+                         for p in calibration["points"])
+            self.cal_n = [n for n, _ in pts]
+            self.cal_err = [max(e for _, e in pts[k:]) for k in range(len(pts))]
         self.z = float(coordination if coordination is not None
                        else tables.cost["coordination"])
         self.max_rayleigh = float(max_rayleigh)
@@ -168,6 +185,30 @@ class Model:
         return cnt, rmin, dev, list(dict.fromkeys(notes))
 
     # ------------------------------------------------------------------ error
+    def cal_contact_error(self, model: str, e: float, n: float) -> float:
+        """E_e,cal(n): the calibration scene's contacts' restitution error (without a
+        calibration: velocity Verlet's for this pair)."""
+        if self.cal is None:
+            return self.t.contact_error("velocity_verlet", model, e, n).value
+        c = self.cal["contact"]
+        return self.t.contact_error(c["integrator"], c["model"], c["restitution"], n).value
+
+    def quantity_error(self, model: str, e: float, n: float) -> tuple[float, list[str]]:
+        """Q_cal(n): the quantity's error at n steps per contact on the calibration scene
+        (without one: the pair's restitution error with velocity Verlet)."""
+        if self.cal is None:
+            return self.cal_contact_error(model, e, n), []
+        ns, es = self.cal_n, self.cal_err
+        if n < ns[0]:
+            at = self.cal_contact_error(model, e, ns[0])
+            scale = self.cal_contact_error(model, e, n) / at if at > 0 else math.inf
+            return es[0] * max(1.0, scale), [
+                f"{n:.3g} steps per contact: coarser than the calibration's {ns[0]:.3g}"]
+        if n >= ns[-1]:
+            return es[-1] * ns[-1] / n, []
+        k = max(i for i in range(len(ns)) if ns[i] <= n)
+        return es[k], []
+
     def error(self, model: str, integrator: str, dt: float, rmin_scale: float = 1.0,
               shape_dev: float = 0.0) -> tuple[float, dict[str, float], float, list[str]]:
         """(eps_Q, its parts, the fewest steps per contact, notes) at ``dt``."""
@@ -187,8 +228,12 @@ class Model:
                     for kind in ("restitution", "duration", "max_overlap")}
             for lk in look.values():
                 notes += lk.notes
+            q, qn = self.quantity_error(law.name, e, n)
+            notes += qn
+            e_cal = self.cal_contact_error(law.name, e, n)
+            ratio = look["restitution"].value / e_cal if e_cal > 0 else math.inf
             w = self.overlap_ratio(k)
-            e_dt = max(e_dt, self.S * look["restitution"].value
+            e_dt = max(e_dt, q * max(1.0, ratio)
                        + w * max(look["duration"].value, look["max_overlap"].value))
             if law is not p.law:
                 T0 = self.f.contact_time(p)
@@ -240,8 +285,9 @@ class Model:
         n_min = registry().lookup("integrator", integrator).min_steps_per_contact
         t_min = min(self.f.contact_time(p, self.law(k, model)) * rmin_scale
                     for k, p in enumerate(self.f.pairs))
-        out = [(t_min / n_min, f"{n_min:g} steps per contact (the engine's least for "
-                               f"{integrator})")]
+        # 1 % inside the engine's limit: its own check must not refuse the rounded step
+        out = [(t_min / (1.01 * n_min), f"{n_min:g} steps per contact (the engine's least "
+                                        f"for {integrator})")]
         if self.f.rayleigh is not None:
             out.append((self.max_rayleigh * self.f.rayleigh * rmin_scale,
                         f"{self.max_rayleigh:g} x the Rayleigh time step"))
@@ -249,15 +295,19 @@ class Model:
                     "the tunnelling guard at twice the impact speed"))
         return out
 
+    def finest_dt(self, model: str, rmin_scale: float) -> float:
+        """The finest step the tables reach for every pair (4 x their finest step)."""
+        t_max = max(self.f.contact_time(p, self.law(k, model)) * rmin_scale
+                    for k, p in enumerate(self.f.pairs))
+        return t_max / (3.99 * self.t.measured_steps()[1])
+
     def best_dt(self, model: str, integrator: str, budget: float, rmin_scale: float
                 ) -> tuple[float, str]:
         """The largest dt whose time-step and model error stays within ``budget``."""
         dt_cap, why = min(self.caps(integrator, model, rmin_scale))
         if self.error(model, integrator, dt_cap, rmin_scale)[0] <= budget:
             return dt_cap, why
-        t_max = max(self.f.contact_time(p, self.law(k, model)) * rmin_scale
-                    for k, p in enumerate(self.f.pairs))
-        lo = t_max / (3.99 * self.t.measured_steps()[1])  # the tables' reach, every pair
+        lo = self.finest_dt(model, rmin_scale)  # the tables' reach, every pair
         if lo >= dt_cap or self.error(model, integrator, lo, rmin_scale)[0] > budget:
             return math.nan, "no step reaches the tolerance"
         hi = dt_cap
@@ -313,8 +363,8 @@ class Model:
                     budget = tolerance - self.S_shape * dev
                     dt, why = (self.best_dt(model, integ, budget, rs) if budget > 0
                                else (math.nan, "the shape error alone exceeds the tolerance"))
-                    if not math.isfinite(dt):  # out of reach: reported at its largest step
-                        dt, why = min(self.caps(integ, model, rs))[0], "out of reach"
+                    if not math.isfinite(dt):  # out of reach: its finest step in the tables
+                        dt, why = self.finest_dt(model, rs), "out of reach (the finest step)"
                     best = None
                     for sk in SKINS:
                         s = Setting(model, integ, dt, sk * self.f.r_min * rs, res)

@@ -142,25 +142,25 @@ QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
     SettledHeight(
         "settled_height", "m",
         "mean height of the bodies' centres above the lowest body's bottom at the end",
-        "the packing a bed settles into is set by how its contacts dissipate (the "
-        "restitution: its error at the step enters with the measured sensitivity S_e) and "
-        "by friction (exact at any step); the static overlaps are exact at any step, and a "
-        "contact law of another stiffness moves the height by the change of the overlap, "
-        "a fraction delta/R of it", ("height", "bed_height", "mean_height")),
+        "the packing a bed settles into is set by how its contacts dissipate and hold "
+        "(restitution and tangential spring, both resolved by the step) and by friction; "
+        "the static overlaps are exact at any step, and a contact law of another stiffness "
+        "moves the height by the change of the overlap, a fraction delta/R of it",
+        ("height", "bed_height", "mean_height")),
     AngleOfRepose(
         "angle_of_repose", "deg",
         "dynamic angle of repose of the bed in a rotating drum, mean over the window",
-        "the angle of a rolling bed is set by friction and rolling friction (exact at any "
-        "step) and by the dissipation in the flowing layer (the restitution: its error "
-        "enters with S_e); a stiffness error enters through the overlaps (delta/R)",
+        "the angle of a rolling bed is set by friction and rolling friction and by the "
+        "dissipation in the flowing layer (resolved by the step); a stiffness "
+        "error enters through the overlaps (delta/R)",
         ("dynamic_angle_of_repose", "repose_angle", "angle")),
     DischargeRate(
         "discharge_rate", "kg/s",
         "mass per second leaving through the outlets in the window",
         "the rate through an orifice is set by its size, the bulk density and the arch "
-        "at the orifice (Beverloo 1961): friction and packing, exact at any step; the "
-        "restitution error enters with S_e, a stiffness error through the overlaps "
-        "(delta/R)", ("rate", "mass_flow_rate", "flow_rate")),
+        "at the orifice (Beverloo 1961): friction and packing, through the contacts the step "
+        "resolves; a stiffness error enters through the overlaps (delta/R)",
+        ("rate", "mass_flow_rate", "flow_rate")),
 )}
 
 
@@ -179,9 +179,9 @@ def quantity(name: Any) -> Quantity:
 
 @dataclass
 class Measurement:
-    """A run of the scene measured: the quantity's ``value``, the wall time of the run's
-    steps (the first step, which compiles or loads the kernels, left out), the steps
-    taken and the bodies at the start."""
+    """A run of the scene measured: the quantity's ``value``, the wall and the process's CPU
+    time of the run's steps (the first step, which compiles or loads the kernels, left
+    out), the steps taken and the bodies at the start."""
 
     value: float
     wall_s: float
@@ -189,11 +189,18 @@ class Measurement:
     simulated_s: float
     bodies: int
     samples: dict = field(default_factory=dict)
+    cpu_s: float = float("nan")
 
     @property
     def cost(self) -> float:
         """Wall seconds per simulated second."""
         return self.wall_s / max(self.simulated_s, 1e-300)
+
+    @property
+    def cpu_cost(self) -> float:
+        """CPU seconds per simulated second (one thread: the work, less sensitive than the
+        wall time to other processes on the machine)."""
+        return self.cpu_s / max(self.simulated_s, 1e-300)
 
 
 def run_and_measure(sim: Any, q: Any, until: float,
@@ -208,18 +215,20 @@ def run_and_measure(sim: Any, q: Any, until: float,
     steps0 = sim.step_count
     t_timed = sim.time
     state: dict = {}
-    wall = 0.0
+    wall = cpu = 0.0
     for t in q.sample_times(sim, until, win):
         if t > sim.time + 0.5 * sim.dt:
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             sim.run(until=t, progress=False)
             wall += time.perf_counter() - t0
+            cpu += time.process_time() - c0
         q.sample(sim, state)
     if until > sim.time + 0.5 * sim.dt:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         sim.run(until=until, progress=False)
         wall += time.perf_counter() - t0
+        cpu += time.process_time() - c0
     v = q.value(sim, state, until, win)
     if not math.isfinite(v):
         raise ParameterError(f"{q.name}: the run gave {v}")
-    return Measurement(v, wall, sim.step_count - steps0, sim.time - t_timed, n0, state)
+    return Measurement(v, wall, sim.step_count - steps0, sim.time - t_timed, n0, state, cpu)

@@ -17,8 +17,8 @@ from ``benchmarks/`` at run time). What it holds and where each figure comes fro
 - ``shapes``: sphere count, surface deviation, volume ratio and smallest element of the
   clustered cylinder, torus and tetrahedron against resolution
   (``benchmarks/shapes_speed_vs_error.py``);
-- ``sensitivity``: per quantity, its measured sensitivity to the restitution and its
-  run-to-run scatter (``benchmarks/advise.py``).
+- ``sensitivity``: per quantity, its error per unit restitution error of its contacts at
+  the calibration step, and its run-to-run scatter (``benchmarks/advise.py``).
 """
 
 from __future__ import annotations
