@@ -404,9 +404,15 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
             w = wl_w[q]
             if w_kind[w] == TRIANGLE:
                 meshes = True
-                lx, ly, lz = to_local(f_cur[w_owner[w]], xi, yi, zi)
-                dist, _, _, _, feature = closest(TRIANGLE, w_par[w], lx, ly, lz, ri)
+                lx, ly, lz = to_local(row18(f_cur, w_owner[w]), xi, yi, zi)
+                dist, lnx, lny, lnz, feature = closest(TRIANGLE, row20(w_par, w), lx, ly, lz,
+                                                       ri)
                 wl_tag[q] = feature if dist < (ri + reach if RANGED else ri) else -1
+                # kept for the contact loop below, which rewrites the row in any case
+                wl_f[q, 0] = dist
+                wl_f[q, 1] = lnx
+                wl_f[q, 2] = lny
+                wl_f[q, 3] = lnz
         if meshes:
             resolve_triangle_contacts(q0, q1, wl_w, wl_tag, w_kind, w_owner, w_ids,
                                       w_par, wl_active, wl_hist)
@@ -417,14 +423,28 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
         w = wl_w[q]
         kind = w_kind[w]
         f = row18(f_cur, w_owner[w])  # (tuples: no reference counts per entry)
-        lx, ly, lz = to_local(f, xi, yi, zi)
-        dist, lnx, lny, lnz, feature = closest(kind, row20(w_par, w), lx, ly, lz, ri)
-        touch = touching(kind, dist, ri)
-        if RANGED and not touch and touching(kind, dist, ri + reach):  # still attached?
-            touch = pair_attached(pair_model[mi, w_mat[w]], pair_row(pair_params, mi, w_mat[w]),
-                                  ri - dist, ri, wl_hist, q)
-        if (not touch or (kind == TRIANGLE and wl_tag[q] < 0)
-                or feature == JOINED or b_invmass[bi] == 0.0):
+        if HAS_TRIANGLES and kind == TRIANGLE:
+            # the geometry the loop above found; tag -1: not within reach, or a contact the
+            # mesh rules give to another triangle
+            dist = wl_f[q, 0]
+            lnx = wl_f[q, 1]
+            lny = wl_f[q, 2]
+            lnz = wl_f[q, 3]
+            feature = wl_tag[q]
+            touch = feature >= 0
+            if RANGED and touch and not touching(kind, dist, ri):  # still attached?
+                touch = pair_attached(pair_model[mi, w_mat[w]],
+                                      pair_row(pair_params, mi, w_mat[w]), ri - dist, ri,
+                                      wl_hist, q)
+        else:
+            lx, ly, lz = to_local(f, xi, yi, zi)
+            dist, lnx, lny, lnz, feature = closest(kind, row20(w_par, w), lx, ly, lz, ri)
+            touch = touching(kind, dist, ri)
+            if RANGED and not touch and touching(kind, dist, ri + reach):  # still attached?
+                touch = pair_attached(pair_model[mi, w_mat[w]],
+                                      pair_row(pair_params, mi, w_mat[w]), ri - dist, ri,
+                                      wl_hist, q)
+        if not touch or feature == JOINED or b_invmass[bi] == 0.0:
             if wl_active[q]:
                 for c in range(nh):
                     wl_hist[q, c] = 0.0
