@@ -273,8 +273,8 @@ def main(argv: list[str] | None = None) -> int:
     v.add_argument("--model", action="append", default=None, metavar="NAME",
                    help="only this impact model (repeatable)")
     v.add_argument("--case", action="append", default=None, metavar="NAME",
-                   help="only this case: co1 ... co8, sandwich, rolling_stop, flip "
-                   "(repeatable)")
+                   help="only this case: co1 ... co8, sandwich, rolling_stop, flip, "
+                   "jkr_pull_off, jkr_sticking (repeatable)")
     v.add_argument("--markdown", default=None, metavar="FILE", help="also write the table "
                    "as Markdown")
     v.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
