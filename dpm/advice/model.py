@@ -59,6 +59,10 @@ from .tables import Tables
 #: skins tried, in units of the smallest element radius (dpm's default: 0.4)
 SKINS = (0.2, 0.4, 0.6, 0.8, 1.2, 1.6)
 PACKING = 0.6
+#: a set-up leaving the scene's own integrator or impact model ranks this much dearer per
+#: change: its step module compiles once (about a minute), and differences of a few per
+#: cent are below the cost model's accuracy
+OTHER_MODULE = 1.05
 #: the tunnelling guard stops a run when a body moves more than half its radius in a step;
 #: the advice keeps dt under it at twice the impact speed
 SPEED_MARGIN = 2.0
@@ -94,6 +98,9 @@ class Prediction:
     steps_per_contact: float
     limited_by: str
     notes: list[str] = field(default_factory=list)
+    #: the cost the search ranks by: ``cost``, times OTHER_MODULE for each of integrator and
+    #: model that is not the scene's own
+    rank_cost: float = math.nan
 
 
 class Model:
@@ -199,14 +206,14 @@ class Model:
         if self.cal is None:
             return self.cal_contact_error(model, e, n), []
         ns, es = self.cal_n, self.cal_err
-        if n < ns[0]:
+        if n < ns[0] * (1 - 1e-6):
             at = self.cal_contact_error(model, e, ns[0])
             scale = self.cal_contact_error(model, e, n) / at if at > 0 else math.inf
             return es[0] * max(1.0, scale), [
                 f"{n:.3g} steps per contact: coarser than the calibration's {ns[0]:.3g}"]
         if n >= ns[-1]:
             return es[-1] * ns[-1] / n, []
-        k = max(i for i in range(len(ns)) if ns[i] <= n)
+        k = max([i for i in range(len(ns)) if ns[i] <= n * (1 + 1e-6)], default=0)
         return es[k], []
 
     def error(self, model: str, integrator: str, dt: float, rmin_scale: float = 1.0,
@@ -372,10 +379,13 @@ class Model:
                         if best is None or p.cost < best.cost:
                             best = p
                     out.append(best)
+        own_i = self.f.integrator
+        for p in out:
+            p.rank_cost = p.cost * (OTHER_MODULE if p.setting.integrator != own_i else 1.0) \
+                * (OTHER_MODULE if p.setting.impact_model != "as set" else 1.0)
         ok = [p for p in out if p.error <= tolerance * (1 + 1e-9)]
         bad = [p for p in out if p not in ok]
-        own_i = self.f.integrator
-        ok.sort(key=lambda p: (round(p.cost, 12), p.setting.integrator != own_i,
+        ok.sort(key=lambda p: (p.rank_cost, p.setting.integrator != own_i,
                                p.setting.impact_model != "as set"))
         bad.sort(key=lambda p: p.error)
         return ok + bad
