@@ -14,6 +14,9 @@ oversubscribed) against one process, under ``mpiexec`` (scenes in ``tests/mpi_sc
 - load balance: bodies pulled into one corner keep the ranks' body counts within 40 % of
   the mean (the cut evens their cost; without re-cutting they drift to 90/10);
 - the backend contract scenes (``tests/backend_contract.py``) pass on 2 ranks;
+- the migration and call-end messages (one float64 and one int64 buffer each) round-trip
+  exactly: bodies with clustered elements, contact entries with their history (the pack
+  and unpack functions called directly, no mpiexec);
 - a serial run never imports mpi4py; unsupported requests are refused by name.
 """
 
@@ -276,3 +279,153 @@ def test_dpm_run_scene_file_under_mpiexec(tmp_path):
     fa, fb = a.frame(len(a) - 1), b.frame(len(b) - 1)
     oa, ob = np.argsort(fa["id"]), np.argsort(fb["id"])
     np.testing.assert_allclose(fa["position"][oa], fb["position"][ob], rtol=0, atol=1e-12)
+
+
+def _touching_corner() -> dpm.Simulation:
+    """The corner scene (a cube cluster on a floor, spheres falling on it) after some
+    contacts formed: clustered elements, pair and boundary entries with history."""
+    sim, _ = mpi_scenes.corner("cpu")
+    sim.run(steps=900, progress=False)
+    assert np.any(sim.contacts.active[:sim.contacts.count])
+    assert np.any(sim.wall_contacts.active[:sim.wall_contacts.count])
+    assert np.any(sim.contacts.history[:sim.contacts.count])
+    return sim
+
+
+def test_migration_messages_round_trip_exactly():
+    """A migration from rank 0 of 3 (no mpiexec: the pack and unpack functions called
+    directly) gives each receiver what the pickled messages gave: every body and element
+    array, the new owners and ghost ranks, and the migrants' contacts with their history,
+    bit for bit and in the same dtypes."""
+    from dpm.parallel.local import Pool, element_rows
+    from dpm.parallel.messages import Migration, displacements
+
+    sim = _touching_corner()
+    b, e, be = sim.bodies, sim.elements, sim.backend
+    pool = Pool.of(b, e, be.aux, be.vf, be.wf, sim.contacts, sim.wall_contacts)
+    P, n = 3, len(b)
+    assert np.diff(b.element_start).max() > 1  # (a clustered body)
+    rng = np.random.default_rng(5)
+    owner = np.where(b.position[:, 0] < 0, 1, 2)
+    owner[rng.random(n) < 0.2] = 0
+    near = rng.random((P, n)) < 0.4
+    near[owner, np.arange(n)] = False
+    act_p, act_w = pool.pairs.act != 0, pool.walls.act != 0
+    eo = e.owner
+    ship, expect = [None] * P, [None] * P
+    for k in (1, 2):
+        rows = np.flatnonzero((owner == k) | near[k])
+        is_mig = np.zeros(n, bool)
+        is_mig[rows[owner[rows] == k]] = True
+        sel_p = np.flatnonzero(act_p & (is_mig[eo[pool.pairs.i]] | is_mig[eo[pool.pairs.j]]))
+        sel_w = np.flatnonzero(act_w & is_mig[eo[pool.walls.i]])
+        ship[k] = (rows, sel_p, sel_w)
+        # what the pickled message carried
+        msg = pool.rows_payload(rows)
+        sub = np.arange(len(eo)) - b.element_start[eo]
+        pm, wm = pool.pairs.where(np.isin(np.arange(len(act_p)), sel_p)), \
+            pool.walls.where(np.isin(np.arange(len(act_w)), sel_w))
+        msg.update(owner=owner[rows], near=near[:, rows],
+                   pairs=(b.id[eo[pm.i]], sub[pm.i], b.id[eo[pm.j]], sub[pm.j], pm.hist,
+                          pm.act),
+                   walls=(b.id[eo[wm.i]], sub[wm.i], wm.j, wm.hist, wm.act))
+        expect[k] = msg
+    mig = Migration(pool, P)
+    counts = mig.counts(pool, ship)
+    assert counts[1:, 2].sum() > 0 and counts[1:, 3].sum() > 0  # (contacts migrate)
+    assert counts[2, 1] == len(element_rows(pool.estart, ship[2][0])[0])
+    fbuf, ibuf = mig.pack(pool, eo, owner, near, ship, counts)
+    assert fbuf.dtype == np.float64 and ibuf.dtype == np.int64
+    fs, is_ = mig.sizes(counts)
+    fo, io = displacements(fs), displacements(is_)
+
+    def same(a, b, what):
+        assert a.dtype == b.dtype and a.shape == b.shape, what
+        np.testing.assert_array_equal(a, b, err_msg=what)
+
+    for k in (1, 2):  # rank k receives rank 0's message only
+        rc = np.zeros_like(counts)
+        rc[0] = counts[k]
+        got = mig.unpack(rc, fbuf[fo[k]:fo[k] + fs[k]], ibuf[io[k]:io[k] + is_[k]])
+        assert got[1] is None and got[2] is None
+        got, ref = got[0], expect[k]
+        for name in ref["bodies"]:
+            same(got["bodies"][name], ref["bodies"][name], name)
+        for name in ref["elements"]:
+            same(got["elements"][name], ref["elements"][name], name)
+        for name in ("counts", "aux", "vf", "wf", "near"):
+            same(got[name], ref[name], name)
+        np.testing.assert_array_equal(got["owner"], ref["owner"])
+        for part in ("pairs", "walls"):
+            for x, y in zip(got[part], ref[part], strict=True):
+                same(x, y, part)
+
+
+def test_gather_messages_round_trip_exactly():
+    """Two ranks' call-end messages (packed from their local scenes, unpacked as the
+    concatenated buffers that ``Iallgatherv`` delivers) rebuild the host state and its
+    contact lists bit for bit."""
+    from dpm.parallel.local import LocalScene, Pool, assemble, orient_pairs, set_entries
+    from dpm.parallel.messages import Gather, displacements
+    from dpm.state import Contacts, WallContacts
+
+    sim = _touching_corner()
+    b, e, be = sim.bodies, sim.elements, sim.backend
+    pool = Pool.of(b, e, be.aux, be.vf, be.wf, sim.contacts, sim.wall_contacts)
+    n = len(b)
+    owner = (b.position[:, 0] > 0).astype(np.int64)
+    assert 0 < owner.sum() < n
+    host = {"position": np.zeros_like(b.position), "velocity": np.zeros_like(b.velocity),
+            "orientation": np.zeros_like(b.orientation),
+            "angular_velocity": np.zeros_like(b.angular_velocity),
+            "force": np.zeros_like(b.force), "torque": np.zeros_like(b.torque),
+            "aux": np.zeros_like(be.aux), "vf": np.zeros_like(be.vf),
+            "wf": np.zeros_like(be.wf)}
+    elem = {"reference": np.zeros_like(e.reference), "position": np.zeros_like(e.position)}
+    width = sim.contacts.history.shape[1]
+    msg = Gather(be.aux.shape[1], True, width, sim.wall_contacts.history.shape[1])
+    parts, counts = [], []
+    for r in (0, 1):  # each rank: its owned bodies, the other's as ghosts (every contact)
+        loc = LocalScene(sim)
+        aux, vf, wf = assemble(loc, pool, np.flatnonzero(owner == r),
+                               np.flatnonzero(owner != r))
+        lb, le = loc.bodies, loc.elements
+        no = loc.n_owned
+        ne_own = int(lb.element_start[no])
+        grow = lb.id.copy()  # (host row = id in this scene)
+        assert np.array_equal(b.id, np.arange(n))
+        gel = b.element_start[grow[le.owner]] + (np.arange(len(le.owner))
+                                                 - lb.element_start[le.owner])
+        c = np.array([no, ne_own, msg.reported(loc.contacts, gel, ne_own, True),
+                      msg.reported(loc.wall_contacts, gel, ne_own, False)], np.int64)
+        fs, is_ = msg.sizes(c[None])
+        fbuf, ibuf = np.empty(int(fs[0])), np.empty(int(is_[0]), np.int64)
+        msg.pack({"position": lb.position, "velocity": lb.velocity,
+                  "orientation": lb.orientation, "angular_velocity": lb.angular_velocity,
+                  "force": lb.force, "torque": lb.torque, "aux": aux, "vf": vf, "wf": wf},
+                 grow[:no], {"reference": le.reference, "position": le.position},
+                 gel[:ne_own], loc.contacts, loc.wall_contacts, gel, c, fbuf, ibuf)
+        parts.append((fbuf, ibuf))
+        counts.append(c)
+    counts = np.array(counts)
+    fs, _ = msg.sizes(counts)
+    assert np.array_equal(displacements(fs), [0, len(parts[0][0])])
+    pairs, walls = msg.unpack(counts, np.concatenate([p[0] for p in parts]),
+                              np.concatenate([p[1] for p in parts]), host, elem)
+    for name, a in host.items():
+        ref = getattr(b, name) if hasattr(b, name) else getattr(be, name)
+        np.testing.assert_array_equal(a, ref, err_msg=name)
+    np.testing.assert_array_equal(elem["reference"], e.reference)
+    np.testing.assert_array_equal(elem["position"], e.position)
+    got_c, got_w = Contacts(), WallContacts()
+    got_c.set_history_width(width)
+    got_w.set_history_width(width)
+    set_entries(got_c, len(e), orient_pairs(pairs, e.material, sim.plan))
+    set_entries(got_w, len(e), walls)
+    for got, ref in ((got_c, sim.contacts), (got_w, sim.wall_contacts)):
+        m = ref.count
+        assert got.count == m
+        np.testing.assert_array_equal(got.start, ref.start)
+        np.testing.assert_array_equal(got.key[:m], ref.key[:m])
+        np.testing.assert_array_equal(got.history[:m], ref.history[:m])
+        np.testing.assert_array_equal(got.active[:m], ref.active[:m])

@@ -6,8 +6,12 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   elements and both contact lists hold the whole scene, so everything the run loop does
   between calls (flow events, output, checkpoints, hooks, guards, diagnosis) runs as on
   one process, the same on every rank; only rank 0 writes files. A call scatters the
-  host state into each rank's sub-domain and gathers it back at its end (each rank sends
-  its owned rows to all).
+  host state into each rank's sub-domain and gathers it back at its end: each rank sends
+  its owned rows (state, the integrator's rows, element references, the contact entries
+  it reports, with history) to all as one float64 and one int64 buffer
+  (:class:`dpm.parallel.messages.Gather`; the counts by ``Allgather``, the payloads by
+  ``Iallgatherv`` into one buffer each, packed and unpacked straight into the host
+  arrays by numba kernels, :mod:`dpm.kernels.migrate`).
 - **Sub-domains**: orthogonal recursive bisection (:mod:`dpm.parallel.decomposition`)
   over the bodies' measured cost (elements plus listed contacts), redone at a call's
   start when the ranks' step times differ by more than ``rebalance`` (LIGGGHTS' ``fix
@@ -28,7 +32,14 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   bodies whose centre left the box migrate to the rank whose box holds it, with their
   full state (orientation, angular velocity, the integrator's rows) and the history of
   every contact they touch; ghost layers are chosen again; each rank rebuilds its lists,
-  carrying every contact's history by pair.
+  carrying every contact's history by pair. One message per pair of ranks, one float64
+  and one int64 buffer (:class:`dpm.parallel.messages.Migration`: body rows, element
+  rows, the migrants' contact entries by body id and element within the body, packed by
+  numba kernels): the counts by ``Ialltoall`` while the buffers are packed, then
+  ``Ialltoallv`` of both.
+- No array travels pickled: besides the buffer calls above, only scalars (a call's
+  steps, the ranks' step times, whether the host state changed, the largest overlap and
+  its element) travel by mpi4py's lower-case calls.
 - Boundary loads and work are summed over ranks (each counts its owned elements only).
 
 - Periodic faces: the kernels take the nearest image of a pair across a periodic face,
@@ -53,7 +64,8 @@ from ..errors import ParameterError
 from ..kernels.halo import STATE_WIDTH, pack_state, unpack_state
 from . import decomposition as dec
 from . import launched_ranks
-from .local import Entries, LocalScene, Pool, assemble, element_rows, set_entries
+from .local import Entries, LocalScene, Pool, assemble, element_rows, orient_pairs, set_entries
+from .messages import Gather, Migration, Scratch, mpi_counts
 
 
 class MpiBackend(CpuBackend):
@@ -113,10 +125,12 @@ class MpiBackend(CpuBackend):
         self._recvs: dict = {}
         self._sbuf: dict = {}
         self._rbuf: dict = {}
+        self._gather_scratch: Scratch | None = None
 
     def __getstate__(self) -> dict[str, Any]:
         state = super().__getstate__()
-        for k in ("_comm", "local", "inner", "boxes", "_host_copy", "_old_boxes", "_times"):
+        for k in ("_comm", "local", "inner", "boxes", "_host_copy", "_old_boxes", "_times",
+                  "_gather_scratch"):
             state[k] = None
         for k in ("_sends", "_recvs", "_sbuf", "_rbuf"):
             state[k] = {}
@@ -469,32 +483,29 @@ class MpiBackend(CpuBackend):
             near[k] = dec.distance_to_box(pos, self.boxes[k], self.sim.period) <= reach
         near[new_owner, np.arange(n_own)] = False
         pool = Pool.of(b, e, inner.aux, inner.vf, inner.wf, loc.contacts, loc.wall_contacts)
-        pairs_act = pool.pairs.where(pool.pairs.act != 0)
-        walls_act = pool.walls.where(pool.walls.act != 0)
-        ids = b.id
-        sub = np.arange(len(e.owner)) - est[e.owner]  # element index within its body
-        send = [None] * P
+        # to each rank: the bodies it will own or hold as ghosts; with those it will own,
+        # the touching entries (pairs and boundary entries) of their elements
+        act_p, act_w = pool.pairs.act != 0, pool.walls.act != 0
+        eo = e.owner
+        ship = [None] * P
         for k in range(P):
             if k == me:
                 continue
             rows = np.flatnonzero((new_owner == k) | near[k])
             if not len(rows):
                 continue
-            msg = pool.rows_payload(rows)
-            msg["owner"] = new_owner[rows]
-            msg["near"] = near[:, rows]
             mig = rows[new_owner[rows] == k]
             if len(mig):
                 is_mig = np.zeros(len(b), bool)
                 is_mig[mig] = True
-                pm = pairs_act.where(is_mig[e.owner[pairs_act.i]]
-                                     | is_mig[e.owner[pairs_act.j]])
-                wm = walls_act.where(is_mig[e.owner[walls_act.i]])
-                msg["pairs"] = (ids[e.owner[pm.i]], sub[pm.i], ids[e.owner[pm.j]],
-                                sub[pm.j], pm.hist, pm.act)
-                msg["walls"] = (ids[e.owner[wm.i]], sub[wm.i], wm.j, wm.hist, wm.act)
-            send[k] = msg
-        recv = self.comm.alltoall(send)
+                sel_p = np.flatnonzero(act_p & (is_mig[eo[pool.pairs.i]]
+                                                | is_mig[eo[pool.pairs.j]]))
+                sel_w = np.flatnonzero(act_w & is_mig[eo[pool.walls.i]])
+            else:
+                sel_p = sel_w = np.zeros(0, np.int64)
+            ship[k] = (rows, sel_p, sel_w)
+        recv = self._exchange_migrants(pool, eo, new_owner, near, ship)
+        ids = b.id
         # the pool: this rank's rows, then the rows received that it does not hold
         top = max([int(ids.max()) if len(ids) else 0]
                   + [int(m["bodies"]["id"].max()) for m in recv if m is not None]) + 1
@@ -533,8 +544,9 @@ class MpiBackend(CpuBackend):
             r = row_of[msg["bodies"]["id"]]
             owner[r] = msg["owner"]
             ghost_on[:, r] |= msg["near"]
-            if "pairs" in msg:
-                migrants.append(r[msg["owner"] == me])
+            mine_now = r[msg["owner"] == me]
+            if len(mine_now):  # (the sender shipped their contacts)
+                migrants.append(mine_now)
                 shipped_p.append(msg["pairs"])
                 shipped_w.append(msg["walls"])
         # pool element index of (body id, element within the body)
@@ -569,6 +581,30 @@ class MpiBackend(CpuBackend):
         # rows no rank needs here any more drop out (old ghosts not chosen again)
         self._place(pool, owner, ghost_on, pids)
 
+    def _exchange_migrants(self, pool: Pool, e_owner: np.ndarray, owner: np.ndarray,
+                           near: np.ndarray, ship: list) -> list:
+        """Send each rank its migration message (:class:`dpm.parallel.messages.Migration`:
+        the counts by ``Ialltoall``, packed meanwhile, then floats and ints by
+        ``Ialltoallv``) and return the received ones, unpacked (None: none)."""
+        from mpi4py import MPI
+
+        comm = self.comm
+        mig = Migration(pool, self.ranks)
+        counts = mig.counts(pool, ship)
+        rcounts = np.empty_like(counts)
+        req = comm.Ialltoall([counts, MPI.INT64_T], [rcounts, MPI.INT64_T])
+        fbuf, ibuf = mig.pack(pool, e_owner, owner, near, ship, counts)
+        req.Wait()
+        fs, is_ = mig.sizes(counts)
+        rfs, ris = mig.sizes(rcounts)
+        rf, ri = np.empty(int(rfs.sum())), np.empty(int(ris.sum()), np.int64)
+        MPI.Request.Waitall([
+            comm.Ialltoallv([fbuf, mpi_counts(fs, "migration"), MPI.DOUBLE],
+                            [rf, mpi_counts(rfs, "migration"), MPI.DOUBLE]),
+            comm.Ialltoallv([ibuf, mpi_counts(is_, "migration"), MPI.INT64_T],
+                            [ri, mpi_counts(ris, "migration"), MPI.INT64_T])])
+        return mig.unpack(rcounts, rf, ri)
+
     # ------------------------------------------------------------------ gather
     def _gather(self) -> int:
         """Every rank's owned rows (state, integrator rows, element references, contact
@@ -585,46 +621,49 @@ class MpiBackend(CpuBackend):
         grow_l = id_row[b.id]                              # host row of each local body
         sub = np.arange(len(e.owner)) - est[e.owner]
         gel = hb.element_start[grow_l[e.owner]] + sub      # host element of each element
-        pe = Entries.of(loc.contacts)
-        gi, gj = gel[pe.i], gel[pe.j]
-        first_local = np.where(gi < gj, pe.i, pe.j)
-        mine = first_local < ne_own
-        pe = pe.where(mine)
-        pe = Entries(gel[pe.i], gel[pe.j], pe.hist, pe.act)
-        we = Entries.of(loc.wall_contacts)
-        we = we.where(we.i < ne_own)
-        we = Entries(gel[we.i], we.j, we.hist, we.act)
-        msg = {"rows": grow_l[:no],
-               "state": [a[:no] for a in (b.position, b.velocity, b.orientation,
-                                          b.angular_velocity, b.force, b.torque)],
-               "aux": inner.aux[:no], "vf": inner.vf[:no], "wf": inner.wf[:no],
-               "erows": gel[:ne_own], "epos": e.position[:ne_own],
-               "eref": e.reference[:ne_own], "pairs": pe, "walls": we}
-        allm = self.comm.allgather(msg)
-        for m in allm:
-            r = m["rows"]
-            for name, a in zip(("position", "velocity", "orientation", "angular_velocity",
-                                "force", "torque"), m["state"], strict=True):
-                getattr(hb, name)[r] = a
-            self.aux[r] = m["aux"]
-            self.vf[r] = m["vf"]
-            self.wf[r] = m["wf"]
-            if not sim.plan.spheres_only:
-                he.position[m["erows"]] = m["epos"]
-            he.reference[m["erows"]] = m["eref"]
-        width = sim.contacts.history.shape[1]
-        pairs = Entries.cat([m["pairs"] for m in allm], width)
-        from .local import orient_pairs
+        from mpi4py import MPI
 
+        comm = self.comm
+        lc, lw = loc.contacts, loc.wall_contacts
+        if self._gather_scratch is None:
+            self._gather_scratch = Scratch()
+        msg = Gather(inner.aux.shape[1], not sim.plan.spheres_only, lc.history.shape[1],
+                     lw.history.shape[1], self._gather_scratch)
+        counts = np.array([no, ne_own, msg.reported(lc, gel, ne_own, True),
+                           msg.reported(lw, gel, ne_own, False)], np.int64)
+        allc = np.empty((self.ranks, 4), np.int64)
+        comm.Allgather([counts, MPI.INT64_T], [allc, MPI.INT64_T])
+        fs, is_ = msg.sizes(allc)
+        fbuf, ibuf = msg.buffers(allc)
+        fc, ic = mpi_counts(fs, "gather"), mpi_counts(is_, "gather")
+        me = self.rank
+        f0, i0 = fc[1][me], ic[1][me]
+        # (this rank's message straight into its place in the received buffers)
+        msg.pack({"position": b.position, "velocity": b.velocity,
+                  "orientation": b.orientation, "angular_velocity": b.angular_velocity,
+                  "force": b.force, "torque": b.torque, "aux": inner.aux, "vf": inner.vf,
+                  "wf": inner.wf}, grow_l[:no],
+                 {"reference": e.reference, "position": e.position}, gel[:ne_own], lc, lw,
+                 gel, counts, fbuf[f0:f0 + fc[0][me]], ibuf[i0:i0 + ic[0][me]])
+        MPI.Request.Waitall([comm.Iallgatherv(MPI.IN_PLACE, [fbuf, fc, MPI.DOUBLE]),
+                             comm.Iallgatherv(MPI.IN_PLACE, [ibuf, ic, MPI.INT64_T])])
+        host = {"position": hb.position, "velocity": hb.velocity,
+                "orientation": hb.orientation, "angular_velocity": hb.angular_velocity,
+                "force": hb.force, "torque": hb.torque, "aux": self.aux, "vf": self.vf,
+                "wf": self.wf}
+        pairs, walls = msg.unpack(allc, fbuf, ibuf, host,
+                                  {"reference": he.reference, "position": he.position})
+        width = sim.contacts.history.shape[1]
+        if not len(pairs.i):  # (as an empty concatenation)
+            pairs = Entries.empty(width)
+        if not len(walls.i):
+            walls = Entries.empty(width)
         pairs = orient_pairs(pairs, he.material, sim.plan)
         set_entries(sim.contacts, len(he), pairs)
-        set_entries(sim.wall_contacts, len(he), Entries.cat([m["walls"] for m in allm],
-                                                             width))
+        set_entries(sim.wall_contacts, len(he), walls)
         # boundary loads (force, torque, work): the sum of every rank's owned elements
         load = sim.walls.load
         if load.size:
-            from mpi4py import MPI
-
             total = np.empty_like(load)
             self.comm.Allreduce(np.ascontiguousarray(load), total, op=MPI.SUM)
             load[:] = total
