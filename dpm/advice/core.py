@@ -23,7 +23,7 @@ from .tables import load_tables
 class Verification:
     """Pilot runs of the scene at the chosen step and at half of it: the quantity at each,
     the Richardson estimate of the chosen step's relative error,
-    |Q(dt) - Q(dt/2)| / (|Q(dt/2)| (1 - 2^-p)), with p the order of the contacts' error at
+    ``|Q(dt) - Q(dt/2)| / (|Q(dt/2)| (1 - 2^-p))``, with p the order of the contacts' error at
     that step (from the tables), and the measured cost [wall and CPU s per simulated s]."""
 
     dt: tuple[float, float]

@@ -1,7 +1,7 @@
 """The advisor's error model, cost model and search (equations in docs/advise.md).
 
 Error of the quantity Q for a set-up (integrator I, impact model m, step dt, shape
-resolution rho), the sum of three parts taken as independent upper bounds:
+resolution rho), the sum of three parts taken as independent upper bounds::
 
     eps_Q = max_p [ Q_cal(n_p) max(1, E_e(I, m, e_p, n_p) / E_e,cal(n_p))
                     + (d_p/r_p) max(E_T, E_d)(I, m, e_p, n_p) ]

@@ -120,7 +120,7 @@ class Tables:
 
     def contact_error(self, integrator: str, model: str, restitution: float, n: float,
                       kind: str = "restitution") -> Lookup:
-        """|relative error| of ``kind`` for one collision of ``model`` at ``restitution``
+        """The absolute relative error of ``kind`` for one collision of ``model`` at ``restitution``
         resolved by ``n`` steps (the monotone envelope of the table; between two measured
         restitutions the larger of the two)."""
         notes: list[str] = []

@@ -42,7 +42,7 @@ class JKRNormal(HertzNormalBase):
         F_n = 4 E* a^3/(3 R*) - sqrt(8 pi W E* a^3) + 2 sqrt(5/6) beta sqrt(2 E* a m*) d'
 
     kept from d = 0 on approach until d < d_c on separation (the attached flag in the
-    history); interaction range |d_c| at R* = r_max. Slots (E*, W, beta); k_n passed on:
+    history); interaction range ``|d_c|`` at R* = r_max. Slots (E*, W, beta); k_n passed on:
     S_n = 2 E* a.
     """
 
@@ -71,7 +71,7 @@ class JKRNormal(HertzNormalBase):
 class JKRTangential(TangentialPart):
     """Mindlin's spring on the JKR contact radius with Tsuji's dashpot and the Thornton &
     Yin (1991) limit: k_t = 8 G* a, c_t = 2 sqrt(5/6) beta sqrt(k_t m*),
-    |F_t| <= mu (F_n + 2 F_c). Slots (G*, beta, mu, E*, W)."""
+    ``|F_t| <= mu (F_n + 2 F_c)``. Slots (G*, beta, mu, E*, W)."""
 
     name = "jkr_mindlin"
     slots = ("G*", "beta", "mu", "E*", "W")
@@ -105,7 +105,7 @@ class JKR(ImpactModel):
     repulsive load; with adhesion that is not yet defined here). Requires young and
     poisson on both materials. Parts: :class:`JKRNormal` x :class:`JKRTangential`.
 
-    The engine finds contacts as far as the scene's largest |d_c| beyond touching (the
+    The engine finds contacts as far as the scene's largest ``|d_c|`` beyond touching (the
     neighbour list, the boundary list and the MPI halo grow by it). The implicit
     integrators and the CUDA backend refuse it.
     """
