@@ -9,32 +9,42 @@ Scenes and quantities (``examples/``):
 3. hopper: the flat-bottomed silo of ``examples/hopper_discharge.py`` (5 mm beads, plug
    switched off at 0.25 s); the discharge rate in a window after the start-up transient.
 
-Two phases, one thread, the scenes' own compiled step modules (``DPM_KERNELS=scene``):
+Two phases, one thread per run, the scenes' own compiled step modules
+(``DPM_KERNELS=scene``); the replicas run side by side on a pool of ``--workers`` processes
+(default 2). A replica is an independent run whose start is perturbed by an amount no
+measurement tells apart (every body moved by up to 1e-3 of its radius and its velocity
+changed by ~1e-7 m/s, seed k for replica k; replica 0 is the scene as built):
 
-- calibration, on the small (``--quick``) size of each scene: the example's set-up
-  (``default``), the same with every initial velocity changed by ~1e-7 m/s (``twin``: the
-  run-to-run scatter sigma = |Q_twin - Q| / sqrt(2) / Q of a chaotic flow), the coarsest
-  step the advisor takes (n_c steps per shortest contact: the engine's 5, 1 % inside, or
-  0.3 of the Rayleigh step if smaller) and 1.5, 2 and 3 times it, and a reference at 80.
-  The quantity's errors |Q(n) - Q(80)| / Q(80) at these steps, its scatter sigma (the RMS
-  of three differences of two runs, over sqrt(2): twin - default, and the two finest
-  steps - reference) and the calibration's contact law go to
-  ``advise.json`` and, condensed (``python -m dpm.advice.condense``), into the advisor's
-  tables before it is asked;
-- check, on the full size: ``default``, ``twin``, ``reference`` (80 steps per contact),
-  and the advisor's choice at 1 % and 5 % (``dpm.advise(..., verify=True)``: the run at the
-  chosen dt, whose quantity and wall time are the measured ones here, and the pilot at
-  dt/2 for the Richardson estimate).
+- calibration, on the small (``--quick``) size of each scene: R replicas at the coarsest
+  step the advisor takes (n_c steps per shortest contact: the engine's 5, 1 % inside, or 0.3
+  of the Rayleigh step if smaller) and 1.5, 2 and 3 times it, and R_ref replicas of a
+  reference at 80 (``CAL_REPLICAS``: R = R_ref = 1 for box_settle, whose settled height
+  scatters by ~0.1 %, far below its step errors; 3 for the drum, 4 for the silo). The
+  systematic error of each step, ``|mean_R - mean_ref| / mean_ref``, its standard
+  uncertainty ``sigma sqrt(1/R + 1/R_ref)``, and the scatter of one run sigma (the sample
+  standard deviation pooled over every step's replicas, each group about its own mean,
+  with its degrees of freedom; box_settle: a twin against the example's set-up, one
+  degree of freedom) go to ``advise.json`` and, condensed (``python -m
+  dpm.advice.condense``), into the advisor's tables before it is asked;
+- check, on the full size: for each tolerance the advice (``dpm.advise``: the step and the
+  replicas N), N runs of it (at most ``--max-runs``; an advice needing more is reported,
+  not verified), R_ref replicas of the reference (``CHECK_REF_REPLICAS``) and one run of
+  the example's own set-up (its cost per run). Measured error: ``|mean_N - mean_ref| /
+  mean_ref`` with its standard uncertainty ``sigma sqrt(1/N + 1/R_ref)``, sigma pooled over
+  the check's replicas; "met" when it is within the tolerance (and, reported too, when it
+  is at the upper end of its uncertainty).
 
-Measured error: |Q - Q_ref| / Q_ref; measured cost: CPU seconds of the run (one thread; the
-first step, which loads the compiled kernels, left out) per simulated second (the wall
-time is recorded too; on the shared machine it moves with the other work). The calibration
-and the check share the scenes' kind, not their size: the check shows how the calibration
-carries over to a larger scene of the same kind, not to a new kind. ``--quick`` calibrates
-and checks on the small size (a smoke test; its sensitivities stay out of the shipped
-tables). Writes benchmarks/results/advise.json and advise.png (advise_quick.*).
+Costs are CPU seconds of the runs (one thread; the first step, which loads the compiled
+kernels, left out) per simulated second, summed over the replicas; the default's cost is
+its step with the replicas it needs for the same tolerance. The calibration and the check
+share the scenes' kind, not their size: the check shows how the calibration carries over
+to a larger scene of the same kind, not to a new kind. ``--quick`` calibrates and checks
+on the small size (a smoke test; its sensitivities stay out of the shipped tables).
+Writes benchmarks/results/advise.json and advise.png (advise_quick.*).
 
-    python benchmarks/advise.py            # ~20 min on the shared 2-core machine
+    python benchmarks/advise.py            # ~30-40 min on the shared 2-core machine
+    python benchmarks/advise.py --calibration-only
+    python benchmarks/advise.py --calibration benchmarks/results/advise.json   # the check
     python benchmarks/advise.py --quick
 """
 
@@ -74,6 +84,12 @@ N_REF = 80.0        # steps per shortest contact of the reference runs
 MAX_RAYLEIGH = 0.3  # the advisor's default cap on dt / Rayleigh step
 CAL_FACTORS = (1.0, 1.5, 2.0, 3.0)  # calibration steps: these times the coarsest
 TOLERANCES = (0.01, 0.05)
+#: calibration replicas (R at each step, R_ref at the reference) per scene: box_settle's
+#: settled height scatters by 0.08 % of itself (a twin), far below its step errors: one run
+#: each; the drum's angle (~0.5-0.9 %) and the silo's rate (~3-5 %) need replicas
+CAL_REPLICAS = {"box_settle": (1, 1), "rotating_drum": (3, 3), "hopper": (4, 4)}
+#: reference replicas of the check (full size)
+CHECK_REF_REPLICAS = {"box_settle": 1, "rotating_drum": 3, "hopper": 4}
 
 
 def scenes(quick: bool) -> dict[str, dict]:
@@ -133,19 +149,48 @@ def shortest_contact(sim: dpm.Simulation) -> float:
     return min(f.contact_time(p) for p in f.pairs)
 
 
-def run_at(spec: dict, n: float | None = None, twin: bool = False) -> dict:
-    """The scene at n steps per shortest contact (None: the example's dt), perturbed for a
-    twin."""
+def run_at(spec: dict, n: float | None = None, twin: bool = False, replica: int = 0,
+           dt: float | None = None, skin: float | None = None) -> dict:
+    """The scene at n steps per shortest contact (None: the example's dt, or ``dt``);
+    replica k > 0 (or a twin: k = 7) starts perturbed with seed k."""
     sim = spec["build"]()
     if twin:
-        perturbed(sim)
-    if n is not None:
+        replica = 7
+    if replica:
+        perturbed(sim, seed=replica)
+    if n is not None or dt is not None:
         f = scene_facts(sim)
-        apply_setting(sim, Setting("as set", f.integrator, shortest_contact(sim) / n,
-                                   0.4 * f.r_min))
+        apply_setting(sim, Setting("as set", f.integrator,
+                                   dt if dt is not None else shortest_contact(sim) / n,
+                                   skin if skin is not None else 0.4 * f.r_min))
     r = measure(spec, sim)
     r["steps_per_contact"] = n
+    r["replica"] = replica
     return r
+
+
+def _task(quick: bool, name: str, kw: dict) -> dict:
+    """One run in a worker process (the scene rebuilt there from its name)."""
+    import numba
+
+    numba.set_num_threads(1)
+    return run_at(scenes(quick)[name], **kw)
+
+
+def run_all(jobs: list[tuple[bool, str, dict]], workers: int) -> list[dict]:
+    """The runs ``jobs`` (quick, scene, keywords of :func:`run_at`) on a pool of
+    ``workers`` processes (one thread each), results in the order given."""
+    jobs = [(q, n, {a: b for a, b in kw.items() if a != "weight"}, kw.get("weight", 1.0))
+            for q, n, kw in jobs]
+    if workers <= 1:
+        return [_task(q, n, kw) for q, n, kw, _ in jobs]
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    order = sorted(range(len(jobs)), key=lambda k: -jobs[k][3])  # the longest first
+    with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as ex:
+        futs = {k: ex.submit(_task, *jobs[k][:3]) for k in order}
+        return [futs[k].result() for k in range(len(jobs))]
 
 
 def coarsest(spec: dict) -> float:
@@ -156,94 +201,194 @@ def coarsest(spec: dict) -> float:
     return max(5.05, tc / (MAX_RAYLEIGH * rayleigh)) if rayleigh else 5.05
 
 
-def calibration_phase(specs: dict) -> dict:
+def pooled_scatter(groups: list[list[float]], scale: float) -> tuple[float, int]:
+    """Sample standard deviation of one run, pooled over groups of replicas of the same
+    set-up (each group about its own mean), relative to ``scale``; its degrees of freedom
+    (the sum of each group's size less one)."""
+    ss, dof = 0.0, 0
+    for g in groups:
+        if len(g) >= 2:
+            m = sum(g) / len(g)
+            ss += sum((x - m) ** 2 for x in g)
+            dof += len(g) - 1
+    return (math.sqrt(ss / dof) / abs(scale) if dof else math.nan), dof
+
+
+def calibration_phase(specs: dict, workers: int) -> dict:
+    """Per scene: R replicas at each calibration step and R_REF at the reference; the
+    systematic error of each step (replica means), its standard uncertainty, and the
+    scatter of one run pooled over every step's replicas."""
     out = {}
+    jobs: list[tuple[bool, str, dict]] = []
+    plan: dict[str, dict] = {}
     for name, spec in specs.items():
-        t0 = time.perf_counter()
         n_cal = coarsest(spec)
-        runs = {"default": run_at(spec), "twin": run_at(spec, twin=True),
-                "reference": run_at(spec, N_REF)}
+        R, R_ref = CAL_REPLICAS[name]
+        keys = []
+        for k in range(R_ref):
+            keys.append(("reference", k))
+            jobs.append((True, name, {"n": N_REF, "replica": k, "weight": N_REF}))
         for f in CAL_FACTORS:
-            runs[f"x{f:g}"] = run_at(spec, f * n_cal)
-        q0, qr = runs["default"]["value"], runs["reference"]["value"]
-        # the scatter: three differences of two runs, each sqrt(2) sigma: the twin against
-        # the default, and the two finest calibration steps against the reference (their
-        # step error is part of it: an overestimate)
-        diffs = [runs["twin"]["value"] / q0 - 1] + [
-            runs[f"x{f:g}"]["value"] / qr - 1 for f in CAL_FACTORS[-2:]]
-        sigma = math.sqrt(sum(d * d for d in diffs) / len(diffs)) / math.sqrt(2)
-        points = [{"steps_per_contact": f * n_cal,
-                   "measured_error": abs(runs[f"x{f:g}"]["value"] / qr - 1)}
-                  for f in CAL_FACTORS]
+            for k in range(R):
+                keys.append((f"x{f:g}", k))
+                jobs.append((True, name, {"n": f * n_cal, "replica": k, "weight": f * n_cal}))
+        if R == 1:  # the scatter from a twin of the example's set-up (one degree of freedom)
+            for tw in (False, True):
+                keys.append(("twin" if tw else "default", 0))
+                jobs.append((True, name, {"twin": tw, "weight": 20.0}))
+        plan[name] = {"n_cal": n_cal, "R": R, "R_ref": R_ref, "keys": keys,
+                      "first": len(jobs) - len(keys)}
+    t0 = time.perf_counter()
+    res = run_all(jobs, workers)
+    wall = time.perf_counter() - t0
+    (Path(tempfile.gettempdir()) / "advise_calibration_runs.json").write_text(
+        json.dumps({"plan": plan, "runs": res}, default=str))  # kept should what follows fail
+    for name, spec in specs.items():
+        pl = plan[name]
+        runs: dict[str, list[dict]] = {}
+        for key, r in zip(pl["keys"], res[pl["first"]:pl["first"] + len(pl["keys"])],
+                          strict=True):
+            runs.setdefault(key[0], []).append(r)
+        R, R_ref = pl["R"], pl["R_ref"]
+        refs = [r["value"] for r in runs["reference"]]
+        qr = sum(refs) / len(refs)
+        groups = [[r["value"] for r in v] for k, v in runs.items()
+                  if k not in ("default", "twin")]
+        if R == 1 and R_ref == 1:
+            groups = [[r["value"] for r in runs["default"] + runs["twin"]]]
+            how = "the example's set-up and a twin started perturbed (1 degree of freedom)"
+        else:
+            how = (f"sample standard deviation pooled over {len(groups)} steps' replicas, "
+                   "each about its own mean")
+        sigma, dof = pooled_scatter(groups, qr)
+        u = sigma * math.sqrt(1 / R + 1 / R_ref)
+        points = []
+        for f in CAL_FACTORS:
+            vals = [r["value"] for r in runs[f"x{f:g}"]]
+            d = abs(sum(vals) / len(vals) / qr - 1)
+            points.append({"steps_per_contact": f * pl["n_cal"], "measured_error": d,
+                           "systematic_error": d, "uncertainty": u, "replicas": R})
         sim = spec["build"]()
         facts = scene_facts(sim)
         k = int(np.argmin([facts.contact_time(p) for p in facts.pairs]))
         pair = facts.pairs[k]
+        win = spec["window"]
         out[spec["quantity"]] = {
-            "runs": runs, "scatter": sigma, "points": points,
+            "runs": runs, "scatter": sigma, "scatter_dof": dof, "scatter_method": how,
+            "replicas": R, "reference_replicas": R_ref, "points": points,
+            "window": None if win is None else win[1] - win[0],
             "contact": {"integrator": facts.integrator, "model": pair.model,
                         "restitution": pair.restitution, "pair": pair.label},
-            "bodies": runs["default"]["bodies"], "scene": f"{name} ({spec['describe']})",
-            "wall_s": time.perf_counter() - t0}
-        pts = ", ".join(f"{100 * p['measured_error']:.3g} % at {p['steps_per_contact']:.3g}"
-                        for p in points)
-        print(f"calibration {name}: Q_ref = {qr:.6g}; {pts}; scatter {100 * sigma:.3g} % "
-              f"({time.perf_counter() - t0:.0f} s)", flush=True)
+            "bodies": runs["reference"][0]["bodies"], "scene": f"{name} ({spec['describe']})",
+            "cpu_s": sum(r["cpu_s"] for v in runs.values() for r in v)}
+        pts = ", ".join(f"{100 * p['systematic_error']:.3g} +- {100 * u:.2g} % at "
+                        f"{p['steps_per_contact']:.3g}" for p in points)
+        print(f"calibration {name} (R = {R}, R_ref = {R_ref}): Q_ref = {qr:.6g}; {pts}; "
+              f"sigma {100 * sigma:.3g} % ({dof} dof)", flush=True)
+    print(f"calibration: {wall:.0f} s wall", flush=True)
     return out
 
 
-def check_phase(specs: dict, tables: str | None, cal: dict | None = None) -> dict:
-    """``cal``: the calibration's runs of the same scenes (--quick), taken instead of
-    running the default, twin and reference again."""
-    out = {}
+def check_phase(specs: dict, tables: str | None, quick: bool, workers: int,
+                max_runs: int, cal: dict | None = None) -> dict:
+    """For each scene: the advice at each tolerance (with its replicas N), N runs of it
+    (at most ``max_runs``), R_REF runs of the reference, one of the default (its cost per
+    run). ``cal``: the calibration's runs of the same scenes (--quick): its reference
+    replicas taken instead of running them again."""
+    out: dict = {}
+    jobs: list[tuple[bool, str, dict]] = []
+    plan: dict[str, list] = {}
     for name, spec in specs.items():
-        t0 = time.perf_counter()
         tc = shortest_contact(spec["build"]())
-        if cal is not None:
-            runs = cal[spec["quantity"]]["runs"]
-            default, twin, ref = runs["default"], runs["twin"], runs["reference"]
-        else:
-            default = run_at(spec)
-            twin = run_at(spec, twin=True)
-            ref = run_at(spec, N_REF)
-        q0 = default["value"]
-        row = {"quantity": spec["quantity"], "describe": spec["describe"],
-               "reference": ref,
-               "scatter": abs(twin["value"] - q0) / math.sqrt(2) / abs(q0), "twin": twin,
-               "default": dict(default, steps_per_contact=tc / default["dt"],
-                               error=abs(q0 / ref["value"] - 1)),
-               "advice": {}}
+        keys: list = []
+        R_ref = CHECK_REF_REPLICAS[name]
+        if cal is None:
+            for k in range(R_ref):
+                keys.append(("reference", k))
+                jobs.append((quick, name, {"n": N_REF, "replica": k, "weight": N_REF}))
+        keys.append(("default", 0))
+        jobs.append((quick, name, {"weight": 20.0}))
+        row = {"quantity": spec["quantity"], "describe": spec["describe"], "advice": {},
+               "shortest_contact": tc}
         for tol in TOLERANCES:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 a = dpm.advise(spec["build"](), tolerance=tol, quantity=spec["quantity"],
-                               verify=True, run_time=spec["until"], window=spec["window"],
-                               pilot=spec["build"], tables=tables)
-            v = a.verification
+                               run_time=spec["until"], window=spec["window"], tables=tables)
             c = a.choice
-            err = abs(v.values[0] / ref["value"] - 1)
-            row["advice"][f"{tol:g}"] = {
+            run_n = min(c.replicas, max_runs)
+            for k in range(run_n):
+                keys.append((f"{tol:g}", k))
+                jobs.append((quick, name, {"dt": c.setting.dt, "skin": c.setting.skin,
+                                           "replica": k, "weight": tc / c.setting.dt}))
+            row["advice"][f"{tol:g}"] = {"advice": a, "runs_planned": run_n}
+        plan[name] = [keys, len(jobs) - len(keys), row]
+    t0 = time.perf_counter()
+    res = run_all(jobs, workers)
+    print(f"check: {time.perf_counter() - t0:.0f} s wall", flush=True)
+    for name, spec in specs.items():
+        keys, first, row = plan[name]
+        runs: dict[str, list[dict]] = {}
+        for key, r in zip(keys, res[first:first + len(keys)], strict=True):
+            runs.setdefault(key[0], []).append(r)
+        if cal is not None:
+            runs["reference"] = cal[spec["quantity"]]["runs"]["reference"]
+        refs = [r["value"] for r in runs["reference"]]
+        qr = float(np.mean(refs))
+        groups = [[r["value"] for r in v] for k, v in runs.items() if k != "default"]
+        sigma, dof = pooled_scatter(groups, qr)
+        default = runs["default"][0]
+        row.update(reference={"runs": runs["reference"], "mean": qr, "replicas": len(refs),
+                              "dt": runs["reference"][0]["dt"],
+                              "cpu_cost": float(np.mean([r["cpu_cost"]
+                                                         for r in runs["reference"]]))},
+                   default=dict(default, steps_per_contact=row["shortest_contact"]
+                                / default["dt"],
+                                error_one_run=abs(default["value"] / qr - 1)),
+                   scatter=sigma, scatter_dof=dof)
+        for tol in TOLERANCES:
+            entry = row["advice"][f"{tol:g}"]
+            a = entry.pop("advice")
+            c, d = a.choice, a.default
+            mine = runs.get(f"{tol:g}", [])
+            vals = [r["value"] for r in mine]
+            n_run = len(vals)
+            err = abs(float(np.mean(vals)) / qr - 1) if vals else math.nan
+            # the measured error's standard uncertainty: this check's pooled sigma
+            u = sigma * math.sqrt(1 / max(n_run, 1) + 1 / len(refs)) if vals else math.nan
+            verified = n_run == c.replicas and a.feasible
+            per_run = float(np.mean([r["cpu_cost"] for r in mine])) if mine else math.nan
+            entry.update({
                 "setting": {"impact_model": c.setting.impact_model,
                             "integrator": c.setting.integrator, "dt": c.setting.dt,
                             "skin": c.setting.skin},
                 "steps_per_contact": c.steps_per_contact, "limited_by": c.limited_by,
-                "feasible": a.feasible, "predicted_error": c.error,
-                "predicted_parts": c.parts, "predicted_cost": c.cost,
-                "default_predicted_error": a.default.error,
-                "default_predicted_cost": a.default.cost,
-                "value": v.values[0], "value_half_dt": v.values[1], "measured_error": err,
-                "measured_cost": v.cpu_cost[0], "measured_wall_cost": v.cost[0],
-                "richardson": v.estimate, "order": v.order, "met": err <= tol,
-                "cheaper_than_default": v.cpu_cost[0] < default["cpu_cost"],
-                "warnings": a.warnings, "report": str(a)}
+                "feasible": a.feasible, "replicas": c.replicas, "runs": n_run,
+                "predicted_error": c.error, "predicted_statistical": c.statistical_error,
+                "predicted_bound": c.total_error, "predicted_parts": c.parts,
+                "predicted_sigma": c.sigma,
+                "predicted_cost_per_run": c.cost, "predicted_cost": c.total_cost,
+                "default_replicas": d.replicas, "default_feasible": a.default_feasible,
+                "default_predicted_error": d.error,
+                "default_predicted_cost_per_run": d.cost,
+                "default_predicted_cost": d.total_cost,
+                "values": vals, "measured_error": err, "uncertainty": u,
+                "measured_cost_per_run": per_run,
+                "measured_cost": per_run * c.replicas,
+                "default_measured_cost": default["cpu_cost"] * d.replicas,
+                "verified": verified,
+                "met": bool(verified and err <= tol),
+                "met_at_upper": bool(verified and err + u <= tol),
+                "cheaper_than_default": per_run * c.replicas
+                < default["cpu_cost"] * d.replicas,
+                "warnings": a.warnings, "report": str(a)})
             print(f"{name} {100 * tol:g} %: dt {c.setting.dt:.3g} ({c.steps_per_contact:.3g} "
-                  f"steps/contact), predicted {100 * c.error:.3g} % {c.cost:.3g} s/s, measured "
-                  f"{100 * err:.3g} % {v.cpu_cost[0]:.3g} s/s, Richardson "
-                  f"{100 * v.estimate:.3g} %; default measured "
-                  f"{100 * row['default']['error']:.3g} % {default['cpu_cost']:.3g} s/s, "
-                  f"scatter {100 * row['scatter']:.3g} %",
-                  flush=True)
-        row["wall_s"] = time.perf_counter() - t0
+                  f"steps/contact) x N = {c.replicas} (ran {n_run}), predicted "
+                  f"{100 * c.error:.2g} % + {100 * c.statistical_error:.2g} %, "
+                  f"{c.total_cost:.3g} s/s; measured {100 * err:.2g} +- {100 * u:.2g} %, "
+                  f"{per_run * c.replicas:.3g} s/s; default N = {d.replicas}, "
+                  f"{default['cpu_cost'] * d.replicas:.3g} s/s; sigma {100 * sigma:.2g} % "
+                  f"({dof} dof)", flush=True)
         out[name] = row
     return out
 
@@ -258,55 +403,73 @@ def plot(result: dict, path: Path) -> None:
     marks = {"box_settle": "o", "rotating_drum": "s", "hopper": "^"}
     for name, row in result["scenes"].items():
         for tol, r in row["advice"].items():
+            if not r["runs"]:
+                continue
             col = "C0" if tol == "0.01" else "C1"
-            a1.loglog(max(r["predicted_error"], 3e-4), max(r["measured_error"], 3e-4),
-                      marks[name], color=col, ms=8,
-                      label=f"{name}, {100 * float(tol):g} %")
+            a1.errorbar(max(r["predicted_bound"], 3e-4), max(r["measured_error"], 3e-4),
+                        yerr=r["uncertainty"], fmt=marks[name], color=col, ms=8,
+                        mfc=col if r["verified"] else "none",
+                        label=f"{name}, {100 * float(tol):g} %, N = {r['replicas']}"
+                        + ("" if r["verified"] else f" (ran {r['runs']}: not verified)"))
             a2.loglog(r["predicted_cost"], r["measured_cost"], marks[name], color=col, ms=8)
-        a1.axhline(row["scatter"], color="0.6", lw=0.8, ls=":")
-        d = row["default"]
-        a2.loglog(row["advice"]["0.01"]["default_predicted_cost"], d["cpu_cost"], marks[name],
-                  mfc="none", color="k", ms=8)
+            a2.loglog(r["default_predicted_cost"], r["default_measured_cost"], marks[name],
+                      mfc="none", color=col, ms=8)
+    a1.set_xscale("log")
+    a1.set_yscale("log")
     lim = [3e-4, 0.2]
     a1.plot(lim, lim, "k-", lw=0.8)
     for t in TOLERANCES:
         a1.axhline(t, color="C0" if t == 0.01 else "C1", lw=0.8, ls="--")
-    a1.set_xlabel("predicted relative error")
-    a1.set_ylabel("measured |Q - Q_ref| / Q_ref")
-    a1.set_title("error (dotted: run-to-run scatter of each scene)", fontsize=10)
-    a1.legend(fontsize=7)
-    c = [0.5, 200]
+    a1.set_xlabel("predicted error bound (systematic + 2 sigma / sqrt N)")
+    a1.set_ylabel("measured |mean_N - mean_ref| / mean_ref")
+    a1.set_title("error of the replica mean (bars: standard uncertainty)", fontsize=10)
+    a1.legend(fontsize=6)
+    c = [1, 3000]
     a2.plot(c, c, "k-", lw=0.8)
-    a2.set_xlabel("predicted cost [s per simulated s]")
-    a2.set_ylabel("measured cost [CPU s per simulated s]")
-    a2.set_title("cost, one thread (open black: the examples' defaults)", fontsize=10)
-    fig.suptitle("dpm advise: the choice at 1 % (blue) and 5 % (orange) against an 80 "
-                 "steps-per-contact reference", fontsize=11)
+    a2.set_xlabel("predicted cost, all replicas [s per simulated s]")
+    a2.set_ylabel("measured cost, all replicas [CPU s per simulated s]")
+    a2.set_title("cost, one thread (open: the default step with the replicas it needs)",
+                 fontsize=10)
+    fig.suptitle("dpm advise: step and replicas at 1 % (blue) and 5 % (orange) against the "
+                 "mean of reference replicas at 80 steps per contact", fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
 def table(result: dict) -> str:
-    lines = ["| scene, quantity | set-up | steps/contact | dt [s] | predicted error | "
-             "measured error | Richardson | predicted cost [s/s] | measured cost [s/s] | met |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| scene, quantity | tolerance | steps/contact (dt [s]) | N | predicted error: "
+             "systematic + 2 sigma/sqrt N | measured error +- u (runs) | met (at the upper "
+             "end) | cost advice, predicted / measured [s/s] | default: N, cost predicted / "
+             "measured [s/s] |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for name, row in result["scenes"].items():
-        d = row["default"]
-        first = row["advice"]["0.01"]
-        lines.append(f"| {name}, {row['quantity']} | default | {d['steps_per_contact']:.3g} | "
-                     f"{d['dt']:.3g} | {100 * first['default_predicted_error']:.2g} % | "
-                     f"{100 * d['error']:.2g} % | - | {first['default_predicted_cost']:.3g} | "
-                     f"{d['cpu_cost']:.3g} | - |")
+        first = True
         for tol, r in row["advice"].items():
-            met = "yes" if r["met"] else "NO"
-            lines.append(f"| | advice {100 * float(tol):g} % | {r['steps_per_contact']:.3g} | "
-                         f"{r['setting']['dt']:.3g} | {100 * r['predicted_error']:.2g} % | "
-                         f"{100 * r['measured_error']:.2g} % | {100 * r['richardson']:.2g} % | "
-                         f"{r['predicted_cost']:.3g} | {r['measured_cost']:.3g} | {met} |")
-        lines.append(f"| | reference | {N_REF:g} | {row['reference']['dt']:.3g} | - | "
-                     f"(scatter {100 * row['scatter']:.2g} %) | - | - | "
-                     f"{row['reference']['cpu_cost']:.3g} | - |")
+            head = f"{name}, {row['quantity']}" if first else ""
+            first = False
+            if r["verified"]:
+                met = ("yes" if r["met"] else "NO") + (" (yes)" if r["met_at_upper"]
+                                                       else " (no)")
+            else:
+                met = f"not verified (ran {r['runs']} of {r['replicas']})"
+            ok = "" if r["feasible"] else " (out of reach)"
+            dn = (f"{r['default_replicas']}" if r["default_feasible"]
+                  else f"{r['default_replicas']} (cannot reach)")
+            lines.append(
+                f"| {head} | {100 * float(tol):g} % | {r['steps_per_contact']:.3g} "
+                f"({r['setting']['dt']:.3g}) | {r['replicas']}{ok} | "
+                f"{100 * r['predicted_error']:.2g} % + {100 * r['predicted_statistical']:.2g} % "
+                f"= {100 * r['predicted_bound']:.2g} % | {100 * r['measured_error']:.2g} +- "
+                f"{100 * r['uncertainty']:.2g} % ({r['runs']}) | {met} | "
+                f"{r['predicted_cost']:.3g} / {r['measured_cost']:.3g} | {dn}, "
+                f"{r['default_predicted_cost']:.3g} / {r['default_measured_cost']:.3g} |")
+        ref = row["reference"]
+        lines.append(f"| | reference | {N_REF:g} ({ref['dt']:.3g}) | {ref['replicas']} | - | "
+                     f"sigma of one run {100 * row['scatter']:.2g} % ({row['scatter_dof']} "
+                     f"dof) | - | {ref['cpu_cost'] * ref['replicas']:.3g} (measured) | "
+                     f"default one run {100 * row['default']['error_one_run']:.2g} % off, "
+                     f"{row['default']['steps_per_contact']:.3g} steps/contact |")
     return "\n".join(lines)
 
 
@@ -315,28 +478,43 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true",
                     help="calibrate and check on the small scenes (a smoke test)")
     ap.add_argument("--calibration", default=None, metavar="JSON",
-                    help="take the calibration from this earlier result (advise_quick.json: "
-                    "the same small scenes) instead of running it")
+                    help="take the calibration from this earlier result (advise.json or "
+                    "advise_quick.json: the same small scenes) instead of running it")
+    ap.add_argument("--calibration-only", action="store_true",
+                    help="stop after the calibration (and, without --quick, the tables)")
+    ap.add_argument("--scenes", nargs="+", default=None, metavar="NAME",
+                    help="only these scenes (box_settle rotating_drum hopper); writes "
+                    "advise[_quick]_partial.json, never the shipped tables")
+    ap.add_argument("--workers", type=int, default=2,
+                    help="processes running the replicas side by side (default 2)")
+    ap.add_argument("--max-runs", type=int, default=12,
+                    help="at most this many runs of an advice in the check (default 12): "
+                    "an advice needing more is reported, not verified")
     a = ap.parse_args(argv)
     import numba
 
     numba.set_num_threads(1)
     t0 = time.perf_counter()
-    stem = "advise_quick" if a.quick else "advise"
+    stem = ("advise_quick" if a.quick else "advise") + ("_partial" if a.scenes else "")
+
+    def pick(specs: dict) -> dict:
+        return {k: v for k, v in specs.items() if not a.scenes or k in a.scenes}
+
     if a.calibration:
         cal = json.loads(Path(a.calibration).read_text())["calibration"]
         print(f"calibration from {a.calibration}", flush=True)
     else:
-        cal = calibration_phase(scenes(True))
+        cal = calibration_phase(pick(scenes(True)), a.workers)
     result = {"quick": a.quick, "machine": {"python": platform.python_version(),
                                            "cpu": platform.processor() or platform.machine()},
-              "n_ref": N_REF, "max_rayleigh": MAX_RAYLEIGH, "calibration": cal}
+              "n_ref": N_REF, "max_rayleigh": MAX_RAYLEIGH, "z": 2.0, "workers": a.workers,
+              "calibration": cal}
     RESULTS.mkdir(exist_ok=True)
     path = RESULTS / f"{stem}.json"
-    # the sensitivities into the advisor's tables, then the advice: the full run writes the
-    # shipped tables, the quick one a temporary file
+    # the calibration into the advisor's tables, then the advice: the full run writes the
+    # shipped tables, the quick or partial one a temporary file
     path.write_text(json.dumps(result, indent=1))  # (--calibration can take it from here)
-    if a.quick:
+    if a.quick or a.scenes:
         tmp = Path(tempfile.mkdtemp())
         for f in RESULTS.glob("*.json"):
             (tmp / f.name).write_text(f.read_text())
@@ -346,10 +524,13 @@ def main(argv: list[str] | None = None) -> int:
     else:
         condense(RESULTS)
         tables = None
-    result["scenes"] = check_phase(scenes(a.quick), tables,
-                                   cal if a.quick and not a.calibration else None)
+    if a.calibration_only:
+        print(f"\nwrote {path} ({time.perf_counter() - t0:.0f} s)")
+        return 0
+    result["scenes"] = check_phase(pick(scenes(a.quick)), tables, a.quick, a.workers,
+                                   a.max_runs, cal if a.quick and not a.calibration else None)
     result["wall_s"] = time.perf_counter() - t0
-    path.write_text(json.dumps(result, indent=1))
+    path.write_text(json.dumps(result, indent=1, default=str))
     plot(result, RESULTS / f"{stem}.png")
     print()
     print(table(result))

@@ -285,8 +285,9 @@ def main(argv: list[str] | None = None) -> int:
     n.add_argument("--dir", default=".", help="where to create NAME/ (default: here)")
     n.set_defaults(func=_cmd_new_plugin)
     ad = sub.add_parser("advise", help="the cheapest impact model, integrator, time step, "
-                        "skin and shape resolution that meet a tolerance on a quantity, with "
-                        "the predicted error and cost (docs/advise.md)")
+                        "skin, shape resolution and number of replicas (runs with perturbed "
+                        "starts, averaged) that meet a tolerance on a quantity, with the "
+                        "predicted error and cost (docs/advise.md)")
     ad.add_argument("scene", help="a TOML scene file")
     ad.add_argument("--tolerance", type=float, default=0.01,
                     help="relative error of the quantity allowed (default 0.01: 1 %%)")

@@ -252,6 +252,7 @@ def test_cli_on_box_settle_toml(capsys):
     out = capsys.readouterr().out
     assert "dpm advise: settled_height within 5 %" in out
     assert "for 0.1 s" in out  # the scene's [run] until
+    assert "replicas: " in out and "independent runs with perturbed starts" in out
     assert main(["advise", str(BOX_TOML), "--tolerance", "0.01", "--quantity", "height"]) == 0
     assert main(["advise", str(BOX_TOML), "--quantity", "porosity"]) == 2
     err = capsys.readouterr().err
@@ -266,6 +267,9 @@ def test_cli_writes_json(tmp_path):
     d = json.loads(out.read_text())
     assert d["quantity"] == "settled_height" and d["tolerance"] == 0.02
     assert d["choice"]["error"] <= 0.02
+    assert isinstance(d["replicas"], int) and d["replicas"] >= 1
+    assert d["choice"]["replicas"] == d["replicas"]
+    assert d["choice"]["total_error"] <= 0.02 * (1 + 1e-9)
 
 
 # ------------------------------------------------------------------------- verification
@@ -299,3 +303,168 @@ def test_condense_reproduces_the_shipped_contact_tables(tmp_path):
     shipped = json.loads(DATA.read_text())
     assert data["contact"] == shipped["contact"]
     assert Tables(data).integrators() == load_tables().integrators()
+
+
+# ------------------------------------------------------------------------- replicas
+
+
+def test_replica_count_formula():
+    from dpm.advice.model import replicas_for
+
+    # N = ceil((z sigma / (tol - eps_sys))^2), z = 2
+    assert replicas_for(0.05, 0.01, 0.04) == 4            # (0.08 / 0.04)^2 = 4 exactly
+    assert replicas_for(0.05, 0.01, 0.041) == 5
+    assert replicas_for(0.01, 0.002, 0.01) == math.ceil((0.02 / 0.008) ** 2)  # 7
+    # it grows as the square of sigma and of 1 / (tol - eps_sys)
+    assert replicas_for(0.05, 0.0, 0.02) == 1
+    assert replicas_for(0.05, 0.0, 0.1) == 16
+    assert replicas_for(0.05, 0.025, 0.1) == 64
+    assert replicas_for(0.01, 0.0, 0.005, z=3.0) == 3       # (0.015 / 0.01)^2 = 2.25
+    # negligible scatter: one run; the systematic error alone at or above tol: no N helps
+    assert replicas_for(0.01, 0.009, 0.0) == 1
+    assert replicas_for(0.01, 0.009, 1e-9) == 1
+    assert replicas_for(0.01, 0.01, 0.001) is None
+    assert replicas_for(0.01, 0.02, 0.0) is None
+
+
+def calibrated(tmp_path: Path, points: list[tuple[float, float, float]], scatter: float,
+               quantity: str = "settled_height", **extra) -> str:
+    """The shipped tables with ``quantity`` calibrated by (steps per contact, systematic
+    error, its uncertainty) points and the scatter of one run (the format of
+    benchmarks/advise.py with replicas)."""
+    data = json.loads(DATA.read_text())
+    sens = data["sensitivity"][quantity]
+    sens.update({"points": [{"steps_per_contact": n, "measured_error": e,
+                             "systematic_error": e, "uncertainty": u, "replicas": 4}
+                            for n, e, u in points],
+                 "scatter": scatter, "scatter_dof": 12, "reference_replicas": 4,
+                 "window": None, **extra})
+    path = tmp_path / f"calibrated_{quantity}.json"
+    path.write_text(json.dumps(data))
+    return str(path)
+
+
+def test_systematic_error_does_not_absorb_the_scatter_of_one_run(box, tmp_path):
+    """sigma large (4 %), the step's systematic error small (0.2 % +- 0.1 %): 5 % needs the
+    coarsest step with a few replicas, not a fine step with one run (which is what adding
+    sqrt(2) sigma to every calibration point prescribed)."""
+    pts = [(6.0, 0.002, 0.001), (9.0, 0.001, 0.001), (12.0, 0.001, 0.001),
+           (18.0, 0.0005, 0.001)]
+    tables = calibrated(tmp_path, pts, scatter=0.04)
+    a = advise(box, tolerance=0.05, quantity="settled_height", tables=tables,
+               integrators=["velocity_verlet"], models=["as set"])
+    c = a.choice
+    assert a.feasible and a.replicas == c.replicas > 1
+    assert c.steps_per_contact < 10                 # coarse: at the engine's or Rayleigh cap
+    assert c.error < 0.01                           # the step error, not the scatter
+    assert c.sigma == pytest.approx(0.04)
+    assert c.statistical_error == pytest.approx(2 * 0.04 / math.sqrt(c.replicas))
+    assert c.total_error <= 0.05 * (1 + 1e-9)
+    from dpm.advice.model import replicas_for
+    assert c.replicas == replicas_for(0.05, c.error, 0.04)
+    # Q_cal is the systematic error plus its uncertainty at each step, never sigma
+    from dpm.advice.model import Model
+    from dpm.advice.scene import scene_facts
+
+    t = load_tables(tables)
+    m = Model(scene_facts(box), t, t.sensitivity("settled_height"))
+    assert m.cal_err == pytest.approx([0.003, 0.002, 0.002, 0.0015])
+    # the search traded the step against replicas: a finer step with one run costs more
+    one = [p for p in a.candidates if p.replicas == 1]
+    assert all(p.total_cost >= c.total_cost for p in one)
+    text = str(a)
+    assert f"replicas: {c.replicas}" in text and "statistical" in text
+
+
+def test_older_tables_load_with_their_single_run_errors(box, tmp_path):
+    """A table without uncertainties (single runs, before replicas): Q_cal = the measured
+    difference plus sqrt(2) sigma, as it was advised then."""
+    data = json.loads(DATA.read_text())
+    data["sensitivity"]["settled_height"] = {
+        "points": [{"steps_per_contact": 6.0, "measured_error": 0.03},
+                   {"steps_per_contact": 12.0, "measured_error": 0.001}],
+        "contact": {"integrator": "velocity_verlet", "model": "hertz_mindlin",
+                    "restitution": 0.3, "pair": "glass-glass"},
+        "scatter": 0.001, "bodies": 1000, "scene": "box_settle (old)"}
+    path = tmp_path / "old.json"
+    path.write_text(json.dumps(data))
+    from dpm.advice.model import Model
+    from dpm.advice.scene import scene_facts
+
+    t = load_tables(path)
+    m = Model(scene_facts(box), t, t.sensitivity("settled_height"))
+    s2 = math.sqrt(2) * 0.001
+    assert m.cal_err == pytest.approx([0.03 + s2, 0.001 + s2])
+    a = advise(box, tolerance=0.01, quantity="settled_height", tables=str(path))
+    assert a.feasible and a.replicas >= 1
+    assert "an older table" in str(a)
+
+
+def test_new_table_fields_load(tmp_path):
+    tables = calibrated(tmp_path, [(6.0, 0.01, 0.002), (12.0, 0.001, 0.002)], 0.01,
+                        window=0.5, scatter_method="pooled")
+    s = load_tables(tables).sensitivity("settled_height")
+    assert s["scatter_dof"] == 12 and s["reference_replicas"] == 4 and s["window"] == 0.5
+    assert s["points"][0]["uncertainty"] == 0.002 and s["points"][0]["replicas"] == 4
+    # condense carries the new fields from benchmarks/results/advise.json
+    from dpm.advice.condense import _sensitivity
+
+    src = {"calibration": {"angle_of_repose": {
+        "points": [], "scatter": 0.005, "scatter_dof": 10, "replicas": 3,
+        "reference_replicas": 3, "window": 0.5, "runs": {"x1": []}, "scatter_method": "m",
+        "contact": {}, "bodies": 843, "scene": "drum"}}}
+    out = _sensitivity(src)["angle_of_repose"]
+    assert out["scatter_dof"] == 10 and out["window"] == 0.5 and "runs" not in out
+
+
+def test_default_cost_is_at_the_same_tolerance(box, tmp_path):
+    """The default's cost for comparison: its own step with the replicas it needs for the
+    same tolerance."""
+    from dpm.advice.model import replicas_for
+
+    pts = [(6.0, 0.002, 0.001), (12.0, 0.001, 0.001), (18.0, 0.0005, 0.001)]
+    tables = calibrated(tmp_path, pts, scatter=0.02)
+    for tol in (0.01, 0.02):
+        a = advise(box, tolerance=tol, quantity="settled_height", tables=tables)
+        d = a.default
+        assert a.default_feasible
+        assert d.replicas == replicas_for(tol, d.error, 0.02) > 1
+        assert d.total_cost == pytest.approx(d.cost * d.replicas)
+        assert a.speedup == pytest.approx(d.total_cost / a.choice.total_cost)
+        assert f"needs {d.replicas} replicas for the same tolerance" in str(a)
+
+
+def test_out_of_reach_by_replicas_says_so(tmp_path):
+    """sigma 20 % of one run over a 0.5 s window, 1 %: more than 64 replicas; the advice
+    says the tolerance is out of reach at this window and how much longer a window would
+    do (sigma ~ 1/sqrt(window))."""
+    from dpm.advice.model import MAX_REPLICAS, replicas_for
+
+    pts = [(6.0, 0.001, 0.001), (12.0, 0.0005, 0.001)]
+    tables = calibrated(tmp_path, pts, scatter=0.2, quantity="angle_of_repose", window=0.5)
+    sim = drum_scene()
+    a = advise(sim, tolerance=0.01, quantity="angle_of_repose", run_time=1.0, tables=tables)
+    assert not a.feasible
+    assert a.replicas == MAX_REPLICAS
+    assert a.replicas_needed == replicas_for(0.01, a.choice.error, 0.2) > MAX_REPLICAS
+    assert a.window_factor == pytest.approx(a.replicas_needed / MAX_REPLICAS)
+    assert any("out of reach by replicas at this window" in w and "times as long" in w
+               and "1/sqrt(window)" in w for w in a.warnings), a.warnings
+    assert f"NOT REACHED with up to {MAX_REPLICAS} replicas" in str(a)
+    # the scatter scales with the window: twice the calibration's window, sigma / sqrt(2)
+    b = advise(sim, tolerance=0.01, quantity="angle_of_repose", window=(0.0, 1.0),
+               tables=tables)
+    assert b.scatter == pytest.approx(0.2 / math.sqrt(2))
+    assert "1/sqrt(window)" in " ".join(b.assumptions)
+    # a final state (no window): nothing to lengthen
+    tables = calibrated(tmp_path, pts, scatter=0.2)
+    c = advise(small_box(), tolerance=0.01, quantity="settled_height", tables=tables)
+    assert not c.feasible and c.window_factor is None
+    assert any("no window to lengthen" in w for w in c.warnings)
+
+
+def test_negligible_scatter_gives_one_run(box, tmp_path):
+    tables = calibrated(tmp_path, [(6.0, 0.03, 0.0), (12.0, 0.001, 0.0)], scatter=0.0)
+    a = advise(box, tolerance=0.01, quantity="settled_height", tables=tables)
+    assert a.replicas == 1 and a.choice.statistical_error == 0.0
+    assert a.default.replicas == 1

@@ -114,8 +114,9 @@ def _shapes(src: dict) -> tuple[dict, float]:
 def _sensitivity(src: dict) -> dict:
     out = {}
     for q, s in src.get("calibration", {}).items():
-        out[q] = {k: s[k] for k in ("points", "contact", "scatter", "bodies", "scene")
-                  if k in s}
+        out[q] = {k: s[k] for k in ("points", "contact", "scatter", "scatter_dof",
+                                    "scatter_method", "replicas", "reference_replicas",
+                                    "window", "bodies", "scene") if k in s}
     return out
 
 

@@ -11,8 +11,9 @@ resolution rho), the sum of three parts taken as independent upper bounds::
 over the material pairs p that can meet: n_p = T_p/dt steps resolve pair p's contact of
 duration T_p at the impact speed v. Q_cal(n) is the quantity's own relative error measured
 on a calibration scene of its kind at a few steps per contact n_i against a run at 80
-(``benchmarks/advise.py``; the run-to-run scatter added: an upper bound), made a step
-function that never grows with n: between n_i and n_i+1 the largest error measured at n_i
+(``benchmarks/advise.py``: the mean of R replicas against the mean of R_ref; the systematic
+error plus its standard uncertainty, an upper bound; never the scatter of one run), made a
+step function that never grows with n: between n_i and n_i+1 the largest error measured at n_i
 or finer, first order beyond the finest, and below the coarsest scaled by the contacts'
 restitution error. It carries every way the step reaches the quantity (dissipation, the
 tangential spring, the settling dynamics). E_e, E_T, E_d are the tables' relative errors of
@@ -26,6 +27,13 @@ over the smaller body's radius, the weight with which a stiffness or duration er
 lengths; T', d', kappa' the duration, overlap and tangential over normal stiffness of the
 replacing law against Hertz-Mindlin's; dev_rms the clustered shape's RMS surface deviation
 over its equal-volume radius.
+
+Replicas: the quantity of one run scatters by sigma (relative, measured on the calibration
+scene; for a time average scaled by sqrt(W_cal / W) to the scene's window W, sigma ~
+1/sqrt(window) for a steady flow). The mean of N replicas (independent runs with perturbed
+starts) meets the tolerance tol when ``eps_Q + z sigma / sqrt(N) <= tol`` (z = 2, about
+95 %): the smallest such N (:func:`replicas_for`), at most ``MAX_REPLICAS``; the cost of a
+set-up is N times one run's, and the search trades a finer step against more replicas.
 
 Cost per simulated second (one thread), wall seconds:
 
@@ -66,6 +74,29 @@ OTHER_MODULE = 1.05
 #: the tunnelling guard stops a run when a body moves more than half its radius in a step;
 #: the advice keeps dt under it at twice the impact speed
 SPEED_MARGIN = 2.0
+#: the mean of N replicas is taken to lie within Z_SCATTER sigma / sqrt(N) of the expected
+#: value (about 95 % for a normal scatter)
+Z_SCATTER = 2.0
+#: the most replicas an advice plans; beyond, the tolerance is out of reach by replicas at
+#: the scene's window
+MAX_REPLICAS = 64
+
+
+def replicas_for(tolerance: float, systematic: float, sigma: float,
+                 z: float = Z_SCATTER) -> int | None:
+    """The smallest number of replicas N >= 1 with ``systematic + z sigma / sqrt(N) <=
+    tolerance`` (all relative errors), N = ceil((z sigma / (tolerance - systematic))^2);
+    None when the systematic error alone reaches the tolerance (no N helps). No cap."""
+    room = tolerance - systematic
+    if not room > 0:
+        return None
+    if not sigma > 0:
+        return 1
+    x = (z * sigma / room) ** 2
+    n = max(1, math.ceil(x))
+    if n > 1 and (n - 1) >= x * (1 - 1e-12):  # floating-point ties: the smaller N
+        n -= 1
+    return n
 
 
 @dataclass(frozen=True)
@@ -98,26 +129,68 @@ class Prediction:
     steps_per_contact: float
     limited_by: str
     notes: list[str] = field(default_factory=list)
-    #: the cost the search ranks by: ``cost``, times OTHER_MODULE for each of integrator and
-    #: model that is not the scene's own
+    #: the cost the search ranks by: ``total_cost``, times OTHER_MODULE for each of
+    #: integrator and model that is not the scene's own
     rank_cost: float = math.nan
+    #: replicas: independent runs with perturbed starts whose quantity is averaged
+    replicas: int = 1
+    #: relative run-to-run scatter (standard deviation) of one run's quantity
+    sigma: float = 0.0
+    #: coverage factor of the replica mean's statistical error (2: about 95 %)
+    z: float = Z_SCATTER
+
+    @property
+    def statistical_error(self) -> float:
+        """z sigma / sqrt(N): the bound on the replica mean's statistical error."""
+        return self.z * self.sigma / math.sqrt(self.replicas)
+
+    @property
+    def total_error(self) -> float:
+        """The systematic error (``error``) plus the statistical one: what the tolerance
+        is met by."""
+        return self.error + self.statistical_error
+
+    @property
+    def total_cost(self) -> float:
+        """``cost`` (one run) times the replicas [wall s per simulated s, one thread]."""
+        return self.cost * self.replicas
+
+
+def bound(point: dict, calibration: dict) -> float:
+    """Q_cal at one calibration step: its systematic error plus that error's standard
+    uncertainty (tables of ``benchmarks/advise.py`` with replicas). An older table's point
+    is the difference of two single runs: its uncertainty is sqrt(2) sigma."""
+    if "uncertainty" in point:
+        return float(point.get("systematic_error", point["measured_error"])) \
+            + float(point["uncertainty"])
+    return float(point["measured_error"]) + math.sqrt(2) * float(
+        calibration.get("scatter") or 0.0)
 
 
 class Model:
     """Error and cost model of one scene and quantity (see the module docstring)."""
 
     def __init__(self, facts: SceneFacts, tables: Tables, calibration: dict | None,
-                 coordination: float | None = None, max_rayleigh: float = 0.3) -> None:
+                 coordination: float | None = None, max_rayleigh: float = 0.3,
+                 window: float | None = None) -> None:
         self.f = facts
         self.t = tables
         #: the quantity's calibration (None: its error is its contacts' restitution error)
         self.cal = calibration
+        #: one run's relative scatter at this scene's window (0: none measured)
+        self.sigma = 0.0
+        #: sqrt(W_cal / W), the scatter's scaling to this scene's window (1: none)
+        self.window_scale = 1.0
         if calibration is not None:
-            sig = math.sqrt(2) * float(calibration.get("scatter", 0.0))
-            pts = sorted((float(p["steps_per_contact"]), float(p["measured_error"]) + sig)
+            pts = sorted((float(p["steps_per_contact"]), bound(p, calibration))
                          for p in calibration["points"])
             self.cal_n = [n for n, _ in pts]
             self.cal_err = [max(e for _, e in pts[k:]) for k in range(len(pts))]
+            sig = float(calibration.get("scatter") or 0.0)
+            w_cal = calibration.get("window")
+            if sig > 0 and w_cal and window and window > 0:
+                self.window_scale = math.sqrt(float(w_cal) / float(window))
+            self.sigma = sig * self.window_scale
         self.z = float(coordination if coordination is not None
                        else tables.cost["coordination"])
         self.max_rayleigh = float(max_rayleigh)
@@ -357,10 +430,59 @@ class Model:
             resolutions = sorted({now, *(float(r) for r in x)})
         return integrators, models, resolutions
 
+    def replicas(self, tolerance: float, systematic: float) -> int | None:
+        """Replicas this scene's scatter needs for ``tolerance`` at a systematic error
+        (:func:`replicas_for`; None: the systematic error alone reaches the tolerance)."""
+        return replicas_for(tolerance, systematic, self.sigma)
+
+    def with_replicas(self, p: Prediction, tolerance: float) -> Prediction:
+        """``p`` given the replicas it needs for ``tolerance`` (MAX_REPLICAS where it needs
+        more or no number suffices: it then does not meet the tolerance)."""
+        n = self.replicas(tolerance, p.error)
+        p.sigma = self.sigma
+        p.replicas = n if n is not None and n <= MAX_REPLICAS else MAX_REPLICAS
+        return p
+
+    def _per_run_cost(self, model: str, integrator: str, dt: float, count_scale: float,
+                      rmin_scale: float) -> float:
+        return min(self.cost(model, integrator, dt, sk * self.f.r_min * rmin_scale,
+                             count_scale, rmin_scale)[0] for sk in SKINS)
+
+    def plan(self, model: str, integrator: str, budget: float, count_scale: float = 1.0,
+             rmin_scale: float = 1.0) -> tuple[float, int, str]:
+        """(dt, N, why): the step and replicas of the lowest total cost (N runs) whose
+        time-step and model error plus z sigma / sqrt(N) stays within ``budget``; every N
+        from 1 to MAX_REPLICAS is tried (a finer step against more replicas). dt is NaN
+        when none is within reach."""
+        if not self.sigma > 0:
+            dt, why = self.best_dt(model, integrator, budget, rmin_scale)
+            return dt, 1, why
+        dt_cap = min(self.caps(integrator, model, rmin_scale))[0]
+        floor = self._per_run_cost(model, integrator, dt_cap, count_scale, rmin_scale)
+        best: tuple[float, float, int, str] = (math.inf, math.nan, 0, "")
+        for n in range(1, MAX_REPLICAS + 1):
+            if n * floor >= best[0]:  # no step is cheaper per run than the coarsest
+                break
+            room = budget - Z_SCATTER * self.sigma / math.sqrt(n)
+            if room <= 0:
+                continue
+            dt, why = self.best_dt(model, integrator, room, rmin_scale)
+            if not math.isfinite(dt):
+                continue
+            eps = self.error(model, integrator, dt, rmin_scale)[0]
+            need = min(n, replicas_for(budget, eps, self.sigma) or n)
+            total = need * self._per_run_cost(model, integrator, dt, count_scale, rmin_scale)
+            if total < best[0]:
+                best = (total, dt, need, why)
+            if dt >= dt_cap * (1 - 1e-12):  # more replicas cannot coarsen the step further
+                break
+        return best[1], best[2], best[3]
+
     def search(self, tolerance: float, integrators: list[str] | None = None,
                models: list[str] | None = None) -> list[Prediction]:
-        """Every candidate's cheapest set-up meeting ``tolerance``, cheapest first (those
-        that cannot: last, by error)."""
+        """Every candidate's cheapest set-up and replicas meeting ``tolerance`` (lowest
+        total cost of all replicas), cheapest first (those that cannot: last, by their
+        error bound with MAX_REPLICAS)."""
         ints, mods, ress = self.candidates(integrators, models)
         out = []
         for res in ress:
@@ -368,24 +490,31 @@ class Model:
             for integ in ints:
                 for model in mods:
                     budget = tolerance - self.S_shape * dev
-                    dt, why = (self.best_dt(model, integ, budget, rs) if budget > 0
-                               else (math.nan, "the shape error alone exceeds the tolerance"))
+                    dt, n, why = (self.plan(model, integ, budget, cnt, rs) if budget > 0
+                                  else (math.nan, 0,
+                                        "the shape error alone exceeds the tolerance"))
                     if not math.isfinite(dt):  # out of reach: its finest step in the tables
-                        dt, why = self.finest_dt(model, rs), "out of reach (the finest step)"
+                        dt, n, why = self.finest_dt(model, rs), 0, \
+                            "out of reach (the finest step)"
                     best = None
                     for sk in SKINS:
                         s = Setting(model, integ, dt, sk * self.f.r_min * rs, res)
                         p = self.predict(s, why)
                         if best is None or p.cost < best.cost:
                             best = p
+                    if n:
+                        best.sigma, best.replicas = self.sigma, n
+                    else:
+                        self.with_replicas(best, tolerance)
                     out.append(best)
         own_i = self.f.integrator
         for p in out:
-            p.rank_cost = p.cost * (OTHER_MODULE if p.setting.integrator != own_i else 1.0) \
+            p.rank_cost = p.total_cost \
+                * (OTHER_MODULE if p.setting.integrator != own_i else 1.0) \
                 * (OTHER_MODULE if p.setting.impact_model != "as set" else 1.0)
-        ok = [p for p in out if p.error <= tolerance * (1 + 1e-9)]
+        ok = [p for p in out if p.total_error <= tolerance * (1 + 1e-9)]
         bad = [p for p in out if p not in ok]
         ok.sort(key=lambda p: (p.rank_cost, p.setting.integrator != own_i,
                                p.setting.impact_model != "as set"))
-        bad.sort(key=lambda p: p.error)
+        bad.sort(key=lambda p: p.total_error)
         return ok + bad
