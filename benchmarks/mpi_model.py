@@ -18,7 +18,9 @@ Per step, on each of P ranks holding n = N / P particles (box_settle-like packin
                                            migration, r: steps between rebuilds
     gather   = sigma * N / s               sigma: cost per particle of the whole-state
                                            gather and scatter at a call's ends, s: steps
-                                           per call (calls last ~1 s)
+                                           per call (a call lasts 50 times its gather,
+                                           at least 1 s and at most 30 s:
+                                           ``MpiBackend.call_aim``)
 
     efficiency = c N / (P * step)
 
@@ -36,6 +38,8 @@ import argparse
 import json
 import math
 from pathlib import Path
+
+from dpm.parallel.backend import MpiBackend
 
 HERE = Path(__file__).resolve().parent
 ALPHA, BETA, ALPHA_R = 2e-6, 10e9, 2e-6
@@ -66,7 +70,8 @@ def calibrate(scaling: dict) -> dict:
         "steps_per_rebuild": steps / max(rebuilds, 1),
         "gather_per_particle_s": sum(r["gather_s"] + r["scatter_s"] for r in ranks)
         / len(ranks) / max(calls, 1) / row["particles"],
-        "call_s": 1.0,
+        "call_aim_s": MpiBackend.CALL_AIM, "gather_share": MpiBackend.GATHER_SHARE,
+        "call_aim_max_s": MpiBackend.CALL_AIM_MAX,
     }
 
 
@@ -79,8 +84,11 @@ def step_time(cal: dict, N: float, P: int) -> dict:
     reduce = 2 * ALPHA_R * math.log2(P)
     migrate = cal["migrate_per_particle_s"] * n / cal["steps_per_rebuild"]
     base = compute + halo + reduce + migrate
-    steps_per_call = max(1.0, cal["call_s"] / base)
-    gather = cal["gather_per_particle_s"] * N / steps_per_call
+    gather_call = cal["gather_per_particle_s"] * N
+    call_s = min(max(cal.get("call_aim_s", 1.0), cal.get("gather_share", 0.0) * gather_call),
+                 cal.get("call_aim_max_s", 1.0))
+    steps_per_call = max(1.0, call_s / base)
+    gather = gather_call / steps_per_call
     total = base + gather
     parts = {"compute": compute, "halo": halo, "reduce": reduce, "migrate": migrate,
              "gather": gather}
