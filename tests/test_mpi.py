@@ -245,6 +245,22 @@ class _TwoRanks:
         return 0
 
 
+def test_calls_are_sized_by_their_gather():
+    """Several ranks: a call aims at 1 s of work, or 50x the last call's gather and
+    scatter when that is longer, at most 30 s; one rank keeps the process's 0.1 s."""
+    from dpm.parallel.backend import MpiBackend
+
+    assert MpiBackend().call_aim == 0.1
+    be = MpiBackend(comm=_TwoRanks())
+    assert be.call_aim == 1.0  # (no call yet)
+    be.timing = {"gather_s": 0.004, "scatter_s": 0.001}
+    assert be.call_aim == 1.0
+    be.timing = {"gather_s": 0.1, "scatter_s": 0.02}
+    assert be.call_aim == pytest.approx(6.0)
+    be.timing = {"gather_s": 2.0, "scatter_s": 0.0}
+    assert be.call_aim == 30.0
+
+
 def test_implicit_integrator_refused_across_ranks():
     from dpm.parallel.backend import MpiBackend
 
