@@ -15,7 +15,8 @@
 3. Peer: the same mesh scene in LIGGGHTS (when ``liggghts`` is on PATH), in the same run:
    the floor written as an ASCII STL with the same triangles (``fix mesh/surface`` +
    ``fix wall/gran ... mesh``), the same spheres, Hertz-Mindlin with the same material
-   constants, dt and number of steps, one core (benchmarks/scenes/mesh_floor). Its step
+   constants, dt, Verlet skin (0.4 mm) and number of steps, one core
+   (benchmarks/scenes/mesh_floor). Its step
    time per sphere is the "Loop time" of the timed ``run`` (best of three) and the ratio
    dpm / LIGGGHTS is reported per triangle count.
 
@@ -46,6 +47,9 @@ from dpm.kernels.boundary_geometry import AXI, PLANE, SIEVE, SLAB, TORUS, TRIANG
 OUT = Path(__file__).parent / "results"
 SCENE = Path(__file__).parent / "scenes" / "mesh_floor"
 R = 2e-3
+#: the Verlet skin of both codes (``neighbor 0.0004 bin`` in mesh_floor.liggghts; dpm's
+#: default, 0.2 d = 0.8 mm here, would list about twice the triangles per sphere)
+SKIN = 4e-4
 FAR = 10.0
 
 
@@ -155,14 +159,15 @@ def run_liggghts(verts, faces, pos, steps: int, repeats: int = 3) -> dict | None
             "step_us_per_sphere": min(loops) / steps / len(pos) * 1e6}
 
 
-def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000,
+def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000, sphere_steps: float = 1e6,
                  liggghts: bool = False) -> list[dict]:
     rows = []
     for m in sizes:
         verts, faces = grid_floor(m)
         a = dpm.Material("glass", density=2500.0, young=5e6, poisson=0.45)
         w = dpm.Material("steel", density=7800.0, young=2e7, poisson=0.3)
-        sim = dpm.Simulation(dt=2e-6, gravity=(0, 0, 0), dt_check="off", threads=1)
+        sim = dpm.Simulation(dt=2e-6, gravity=(0, 0, 0), dt_check="off", threads=1,
+                             skin=SKIN)
         sim.contact(a, a, model="hertz_mindlin", restitution=0.3, friction=0.5)
         sim.contact(a, w, model="hertz_mindlin", restitution=0.3, friction=0.5)
         t0 = time.perf_counter()
@@ -195,23 +200,25 @@ def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000,
                 sim.backend.module.boundary_search_pass(*args)
             best = min(best, (time.perf_counter() - t1) / reps)
         rebuild = best / len(pos)
-        # (b) steps without rebuild (the spheres barely move)
+        # (b) steps without rebuild (the spheres barely move); at least 1e6 sphere-steps
+        # per timing (few spheres: many steps), so that each lasts ~0.2 s or more
+        nsteps = int(min(100000, max(steps, sphere_steps / len(pos))))
         sim.run(steps=5, progress=False)
         best = math.inf
         for _ in range(3):
             r0 = sim.rebuild_count
             t1 = time.perf_counter()
-            sim.run(steps=steps, progress=False)
+            sim.run(steps=nsteps, progress=False)
             el = time.perf_counter() - t1
             if sim.rebuild_count == r0:
                 best = min(best, el)
         entries = int(sim.wall_contacts.count)
         rows.append(dict(triangles=len(faces), spheres=len(pos), prepare_s=prep,
                          rebuild_us_per_sphere=rebuild * 1e6,
-                         step_us_per_sphere=best / steps / len(pos) * 1e6,
+                         step_us_per_sphere=best / nsteps / len(pos) * 1e6, steps=nsteps,
                          candidates_per_sphere=entries / len(pos)))
         if liggghts:
-            lg = run_liggghts(verts, faces, pos, steps)
+            lg = run_liggghts(verts, faces, pos, nsteps)
             if lg:
                 rows[-1].update(liggghts_step_us_per_sphere=lg["step_us_per_sphere"],
                                 liggghts_whole_run_s=lg["whole_run_s"],
@@ -281,7 +288,7 @@ def main() -> None:
     res = {"machine": platform.processor() or platform.machine(),
            "numba": numba.__version__, "per_kind_ns": per_kind()}
     print(res["per_kind_ns"], flush=True)
-    mesh_scaling([1], n_spheres=1, steps=5)  # compile / load the step module first
+    mesh_scaling([1], n_spheres=1, steps=5, sphere_steps=0)  # compile / load the step module first
     res["mesh"] = mesh_scaling(sizes, liggghts=not args.no_liggghts)
     res["liggghts"] = (None if args.no_liggghts or shutil.which("liggghts") is None else
                        subprocess.run(["liggghts", "-h"], capture_output=True, text=True)
