@@ -495,7 +495,10 @@ class MpiBackend(CpuBackend):
         for k in range(P):
             near[k] = dec.distance_to_box(pos, self.boxes[k], self.sim.period) <= reach
         near[new_owner, np.arange(n_own)] = False
-        pool = Pool.of(b, e, inner.aux, inner.vf, inner.wf, loc.contacts, loc.wall_contacts)
+        # touching entries only: the lists are rebuilt right after, and an entry that does
+        # not touch has no history to carry (it was cleared when the pair parted)
+        pool = Pool.of(b, e, inner.aux, inner.vf, inner.wf, loc.contacts, loc.wall_contacts,
+                       active_only=True)
         # to each rank: the bodies it will own or hold as ghosts; with those it will own,
         # the touching entries (pairs and boundary entries) of their elements
         act_p, act_w = pool.pairs.act != 0, pool.walls.act != 0
