@@ -67,6 +67,9 @@ def test_shipped_tables_are_there_and_complete():
         assert s is not None and len(s["points"]) >= 2, q
         assert all(p["steps_per_contact"] >= 5 for p in s["points"]), q
         assert 0 <= s["scatter"] < 1 and s["contact"]["model"] == "hertz_mindlin", q
+        # the systematic error of replica means and its uncertainty (benchmarks/advise.py)
+        assert all("uncertainty" in p and "systematic_error" in p for p in s["points"]), q
+        assert s["scatter_dof"] >= 1 and s["reference_replicas"] >= 1, q
 
 
 def test_envelope_never_grows_with_finer_steps():
@@ -468,3 +471,20 @@ def test_negligible_scatter_gives_one_run(box, tmp_path):
     a = advise(box, tolerance=0.01, quantity="settled_height", tables=tables)
     assert a.replicas == 1 and a.choice.statistical_error == 0.0
     assert a.default.replicas == 1
+
+
+def test_step_error_is_held_at_the_reference_step(box, tmp_path):
+    """First order beyond the finest calibrated step, but no claim finer than the
+    calibration's reference (80 steps per contact): held there."""
+    from dpm.advice.model import Model
+    from dpm.advice.scene import scene_facts
+
+    tables = calibrated(tmp_path, [(6.0, 0.01, 0.002), (20.0, 0.004, 0.002)], 0.01,
+                        reference_steps=80.0)
+    t = load_tables(tables)
+    m = Model(scene_facts(box), t, t.sensitivity("settled_height"))
+    at = {n: m.quantity_error("hertz_mindlin", 0.3, n)[0] for n in (20.0, 40.0, 80.0, 400.0)}
+    assert at[20.0] == pytest.approx(0.006)
+    assert at[40.0] == pytest.approx(0.003)       # first order
+    assert at[80.0] == pytest.approx(0.0015)
+    assert at[400.0] == pytest.approx(0.0015)     # held at the reference's step

@@ -117,6 +117,8 @@ def _sensitivity(src: dict) -> dict:
         out[q] = {k: s[k] for k in ("points", "contact", "scatter", "scatter_dof",
                                     "scatter_method", "replicas", "reference_replicas",
                                     "window", "bodies", "scene") if k in s}
+        if "uncertainty" in str(s.get("points")):
+            out[q]["reference_steps"] = src.get("n_ref", 80.0)
     return out
 
 

@@ -13,20 +13,20 @@ duration T_p at the impact speed v. Q_cal(n) is the quantity's own relative erro
 on a calibration scene of its kind at a few steps per contact n_i against a run at 80
 (``benchmarks/advise.py``: the mean of R replicas against the mean of R_ref; the systematic
 error plus its standard uncertainty, an upper bound; never the scatter of one run), made a
-step function that never grows with n: between n_i and n_i+1 the largest error measured at n_i
-or finer, first order beyond the finest, and below the coarsest scaled by the contacts'
-restitution error. It carries every way the step reaches the quantity (dissipation, the
-tangential spring, the settling dynamics). E_e, E_T, E_d are the tables' relative errors of
-one collision's restitution, duration and largest overlap at n steps for integrator I,
-model m and the pair's restitution e_p (mean over the contact's start within a step, made
-monotone in n: E(n) = max over n' >= n); E_e,cal the same for the calibration scene's
-integrator, model and restitution: a scene whose contacts err more than the calibration's
-at the same steps gets that much more error, one whose contacts err less is given no
-credit for it. d_p/r_p = (15 m* v^2 / (16 E* sqrt(R*)))^(2/5) / r is Hertz's largest overlap
-over the smaller body's radius, the weight with which a stiffness or duration error moves
-lengths; T', d', kappa' the duration, overlap and tangential over normal stiffness of the
-replacing law against Hertz-Mindlin's; dev_rms the clustered shape's RMS surface deviation
-over its equal-volume radius.
+step function that never grows with n: between n_i and n_i+1 the largest error measured at
+n_i or finer, first order beyond the finest up to the reference's 80 (held there), and
+below the coarsest scaled by the contacts' restitution error. It carries every way the step
+reaches the quantity (dissipation, the tangential spring, the settling dynamics). E_e, E_T,
+E_d are the tables' relative errors of one collision's restitution, duration and largest
+overlap at n steps for integrator I, model m and the pair's restitution e_p (mean over the
+contact's start within a step, made monotone in n: E(n) = max over n' >= n); E_e,cal the
+same for the calibration scene's integrator, model and restitution: a scene whose contacts
+err more than the calibration's at the same steps gets that much more error, one whose
+contacts err less is given no credit for it. d_p/r_p = (15 m* v^2 / (16 E* sqrt(R*)))^(2/5)
+/ r is Hertz's largest overlap over the smaller body's radius, the weight with which a
+stiffness or duration error moves lengths; T', d', kappa' the duration, overlap and
+tangential over normal stiffness of the replacing law against Hertz-Mindlin's; dev_rms the
+clustered shape's RMS surface deviation over its equal-volume radius.
 
 Replicas: the quantity of one run scatters by sigma (relative, measured on the calibration
 scene; for a time average scaled by sqrt(W_cal / W) to the scene's window W, sigma ~
@@ -285,7 +285,10 @@ class Model:
             return es[0] * max(1.0, scale), [
                 f"{n:.3g} steps per contact: coarser than the calibration's {ns[0]:.3g}"]
         if n >= ns[-1]:
-            return es[-1] * ns[-1] / n, []
+            # first order beyond the finest calibrated step, down to the reference's step
+            # (the calibration measures against that run: no claim finer than it)
+            n_ref = max(float(self.cal.get("reference_steps", 80.0)), ns[-1])
+            return es[-1] * ns[-1] / min(n, n_ref), []
         k = max([i for i in range(len(ns)) if ns[i] <= n * (1 + 1e-6)], default=0)
         return es[k], []
 
