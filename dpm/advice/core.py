@@ -136,7 +136,8 @@ class Advice:
                  f"thread; {c.cost:.3g} per run x {n})" + rt(c.total_cost),
                  f"  default: {d.setting.describe()}: {d.steps_per_contact:.3g} steps per "
                  f"contact, systematic error {100 * d.error:.3g} %, "
-                 + (f"needs {d.replicas} replicas for the same tolerance: cost "
+                 + (f"needs {d.replicas} replica{'s' if d.replicas != 1 else ''} for "
+                    f"the same tolerance: cost "
                     f"{d.total_cost:.3g} s/s (the choice: {self.speedup:.2f}x cheaper)"
                     if self.default_feasible else
                     f"cannot reach the tolerance with up to {self.max_replicas} replicas "

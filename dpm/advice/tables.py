@@ -17,8 +17,10 @@ from ``benchmarks/`` at run time). What it holds and where each figure comes fro
 - ``shapes``: sphere count, surface deviation, volume ratio and smallest element of the
   clustered cylinder, torus and tetrahedron against resolution
   (``benchmarks/shapes_speed_vs_error.py``);
-- ``sensitivity``: per quantity, its error per unit restitution error of its contacts at
-  the calibration step, and its run-to-run scatter (``benchmarks/advise.py``).
+- ``sensitivity``: per quantity, its calibration (``benchmarks/advise.py``): the systematic
+  error at a few steps per contact against a reference at 80 (means of replicas) with its
+  standard uncertainty, the contact law of the calibration scene, and the run-to-run
+  scatter sigma of one run with its degrees of freedom and averaging window.
 """
 
 from __future__ import annotations
