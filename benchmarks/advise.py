@@ -42,7 +42,7 @@ to a larger scene of the same kind, not to a new kind. ``--quick`` calibrates an
 on the small size (a smoke test; its sensitivities stay out of the shipped tables).
 Writes benchmarks/results/advise.json and advise.png (advise_quick.*).
 
-    python benchmarks/advise.py            # ~30-40 min on the shared 2-core machine
+    python benchmarks/advise.py            # ~17 min (1,009 s) on the shared 2-core machine
     python benchmarks/advise.py --calibration-only
     python benchmarks/advise.py --calibration benchmarks/results/advise.json   # the check
     python benchmarks/advise.py --quick
