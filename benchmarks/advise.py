@@ -510,7 +510,26 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cell-cpu", type=float, default=600.0,
                     help="CPU seconds (predicted) the check spends on one advice's runs "
                     "(default 600)")
+    ap.add_argument("--cal-replicas", nargs="+", default=(), metavar="NAME=R,R_REF",
+                    help="calibration replicas of a scene instead of CAL_REPLICAS, e.g. "
+                    "rotating_drum=20,20")
+    ap.add_argument("--check-ref", nargs="+", default=(), metavar="NAME=R_REF",
+                    help="reference replicas of a scene's check instead of "
+                    "CHECK_REF_REPLICAS, e.g. rotating_drum=12")
+    ap.add_argument("--merge-into", default=None, metavar="JSON",
+                    help="with --scenes: write these scenes' calibration and check into "
+                    "this full result (advise.json) in place of its own, then condense the "
+                    "shipped tables from it and draw its plot again")
     a = ap.parse_args(argv)
+    for item in a.cal_replicas:
+        name, _, val = item.partition("=")
+        r, _, r_ref = val.partition(",")
+        CAL_REPLICAS[name] = (int(r), int(r_ref or r))
+    for item in a.check_ref:
+        name, _, val = item.partition("=")
+        CHECK_REF_REPLICAS[name] = int(val)
+    if a.merge_into and not a.scenes:
+        ap.error("--merge-into needs --scenes (a full run writes advise.json itself)")
     import numba
 
     numba.set_num_threads(1)
@@ -556,7 +575,32 @@ def main(argv: list[str] | None = None) -> int:
     print()
     print(table(result))
     print(f"\nwrote {path} and .png ({result['wall_s']:.0f} s)")
+    if a.merge_into:
+        merge(result, Path(a.merge_into), argv)
     return 0
+
+
+def merge(partial: dict, into: Path, argv: list[str] | None) -> None:
+    """A rerun of some scenes (``--scenes``) written into the full result: their
+    calibration and check replace the full result's, a record of the rerun (its command,
+    wall time and replicas) goes to ``reruns``, the shipped tables are condensed again and
+    the plot drawn again."""
+    full = json.loads(into.read_text())
+    full["calibration"].update(partial["calibration"])
+    full.setdefault("scenes", {}).update(json.loads(json.dumps(partial.get("scenes", {}),
+                                                               default=str)))
+    full.setdefault("reruns", []).append({
+        "argv": list(argv if argv is not None else sys.argv[1:]),
+        "scenes": sorted(partial.get("scenes", {}) or partial["calibration"]),
+        "wall_s": partial.get("wall_s"), "cal_replicas": dict(CAL_REPLICAS),
+        "check_ref_replicas": dict(CHECK_REF_REPLICAS)})
+    into.write_text(json.dumps(full, indent=1, default=str))
+    if into.resolve().parent == RESULTS.resolve() and not full.get("quick"):
+        condense(RESULTS)
+    plot(full, into.with_suffix(".png"))
+    print()
+    print(table(full))
+    print(f"\nmerged into {into} (tables condensed again) and its .png")
 
 
 if __name__ == "__main__":
