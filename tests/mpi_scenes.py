@@ -234,6 +234,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rebalance", type=float, default=1.1)
     ap.add_argument("--output", default=None, help="also write the run to this HDF5 file")
     ap.add_argument("--calls", type=int, default=8, help="run the steps in this many calls")
+    ap.add_argument("--call-aim", type=float, default=None,
+                    help="seconds of work the MPI backend aims a kernel call at (a large "
+                    "value: every sim.run one call)")
     ap.add_argument("--tilt-gravity", action="store_true",
                     help="tilt gravity half-way (a script changing the scene between runs)")
     args = ap.parse_args(argv)
@@ -248,6 +251,8 @@ def main(argv: list[str] | None = None) -> int:
             sim, steps = SCENES[args.scene](args.device)
         if args.output:
             sim.output(args.output, every_steps=max(1, steps // 4), overwrite=True)
+    if args.call_aim is not None:
+        sim.backend.CALL_AIM = sim.backend.CALL_AIM_MAX = args.call_aim
     per_call = []
     done = 0
     chunk = max(1, steps // args.calls)
@@ -263,15 +268,17 @@ def main(argv: list[str] | None = None) -> int:
         if args.checkpoint and sim.step_count == int(args.checkpoint[0]):
             sim.checkpoint(args.checkpoint[1])
         t = getattr(sim.backend, "timing", {}) or {}
+        tot = getattr(sim.backend, "totals", {}) or {}  # (summed over the calls so far)
         if launched_ranks() > 1:
             from mpi4py import MPI
 
             rows = MPI.COMM_WORLD.allgather([t.get("owned", len(sim.bodies)),
-                                             t.get("steps_s", 0.0), t.get("halo_s", 0.0)])
+                                             t.get("steps_s", 0.0), t.get("halo_s", 0.0),
+                                             tot.get("recuts", 0), tot.get("calls", 0)])
             per_call.append(rows)
     wall = time.perf_counter() - t0
     res = state(sim)
-    res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 3))
+    res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 5))
     res["wall_s"] = np.array(wall)
     sim.close()
     if dpm.parallel.rank() == 0:

@@ -188,6 +188,28 @@ def test_load_balance_follows_the_bodies(tmp_path):
 
 
 @needs_mpi
+def test_long_calls_keep_the_balance(tmp_path):
+    """The gather scene in one sim.run with calls of unlimited length (the run loop's
+    ramp 10, 40, 160, ... steps: the last call holds more than half the run): the cut
+    follows the bodies at list rebuilds inside the calls (``recuts``), and no body is
+    lost."""
+    one_call = ("--calls", "1", "--call-aim", "1e9")
+    kept = parallel("gather", 2, tmp_path, *one_call, "--rebalance", "1e9")
+    got = parallel("gather", 2, tmp_path, *one_call)
+    for run in (kept, got):
+        assert run["per_call"].shape[0] == 1 and np.all(run["per_call"][0, :, 4] <= 8), \
+            run["per_call"]  # (one sim.run, a few kernel calls)
+    assert np.all(kept["per_call"][0, :, 3] == 0)
+    owned = kept["per_call"][0, :, 0]
+    assert owned.max() / owned.mean() > 1.5, owned  # the scene does unbalance
+    assert np.all(got["per_call"][0, :, 3] >= 1), got["per_call"]  # cut again in the call
+    owned = got["per_call"][0, :, 0]
+    assert owned.max() / owned.mean() < 1.4, owned
+    np.testing.assert_array_equal(np.sort(got["id"]), np.sort(kept["id"]))
+    assert len(np.unique(got["id"])) == len(got["id"])
+
+
+@needs_mpi
 def test_backend_contract_on_two_ranks():
     out = mpirun(2, "--backend", '{"device": "mpi"}', script=HERE / "backend_contract.py",
                  timeout=1500)

@@ -263,8 +263,11 @@ class MpiBackend(CpuBackend):
         ran = 0
         rebuilds = 0
         worst_all = 0.0
-        t_halo = t_mig = 0.0
-        t_start = time.perf_counter()
+        t_halo = t_mig = t_recut = 0.0
+        recuts = 0
+        work, work_steps = 0.0, 0  # this rank's seconds in the step kernels since a check
+        clock = time.perf_counter
+        t_start = clock()
         inner.diag[4] = 0.0
         inner.diag[5] = -1
         rec = None
@@ -273,7 +276,9 @@ class MpiBackend(CpuBackend):
                 rec = inner.records()
                 ctl, bodies, elems, pairs, wl, bnd = rec
                 ctl_all = ctl._replace(n_owned=len(loc.bodies))
+            t0 = clock()
             need = int(module.ranked_pre_force(dt, ctl_all, bodies, elems, bnd, frames, s))
+            work += clock() - t0
             flags[0] = need < 0
             flags[1] = need > 0
             comm.Allreduce(flags, out, op=MPI.MAX)
@@ -281,7 +286,12 @@ class MpiBackend(CpuBackend):
                 status = STATUS_NAN
                 break
             if out[1]:
-                t0 = time.perf_counter()
+                t0 = clock()
+                if self._recut_in_call(work, work_steps):
+                    recuts += 1
+                t_recut += clock() - t0
+                work, work_steps = 0.0, 0
+                t0 = clock()
                 self._migrate()
                 inner.rebuild()  # (history of the carried entries merged by pair)
                 rebuilds += 1
@@ -289,7 +299,10 @@ class MpiBackend(CpuBackend):
                 rec = inner.records()
                 ctl, bodies, elems, pairs, wl, bnd = rec
                 ctl_all = ctl._replace(n_owned=len(loc.bodies))
+            t0 = clock()
             worst = module.ranked_forces(dt, ctl, bodies, elems, pairs, wl, bnd, inner.diag)
+            work += clock() - t0
+            work_steps += 1
             t0 = time.perf_counter()
             self._halo()
             t_halo += time.perf_counter() - t0
@@ -312,8 +325,10 @@ class MpiBackend(CpuBackend):
                                                         for b in self._sbuf.values()))}
         self.timing["calls"] = 1
         self.timing["rebuilds"] = rebuilds
-        for k in ("calls", "steps", "rebuilds", "steps_s", "halo_s", "migrate_s", "gather_s",
-                  "scatter_s"):
+        self.timing["recuts"] = recuts
+        self.timing["recut_s"] = t_recut
+        for k in ("calls", "steps", "rebuilds", "recuts", "steps_s", "halo_s", "migrate_s",
+                  "recut_s", "gather_s", "scatter_s"):
             self.totals[k] = self.totals.get(k, 0.0) + self.timing[k]
         best = comm.allreduce((float(inner.diag[4]), self.rank), op=MPI.MAXLOC)
         d = self.diag
@@ -476,6 +491,58 @@ class MpiBackend(CpuBackend):
             unpack_state(first, buf, b.position, b.velocity, b.orientation,
                          b.angular_velocity, b.force, b.torque, inner.vf, inner.wf,
                          inner.aux)
+
+    # ------------------------------------------------------------------ re-cut in a call
+    def _owned_cost(self) -> np.ndarray:
+        """This rank's owned bodies' modelled cost (elements plus listed contacts, both
+        sides of each pair, as :meth:`_cost` counts them on the host) from its own lists."""
+        loc = self.local
+        b, e, c = loc.bodies, loc.elements, loc.contacts
+        n_own, ne = loc.n_owned, len(e.owner)
+        per_elem = np.diff(c.start[:ne + 1]).astype(float)
+        per_elem += np.bincount(c.key[:c.count], minlength=ne)[:ne]
+        per_elem += 1.0  # (the element itself)
+        return np.bincount(e.owner, weights=per_elem, minlength=len(b))[:n_own]
+
+    def _recut_in_call(self, work: float, steps: int) -> bool:
+        """At a list rebuild inside a call (collective): cut the domain again when the
+        ranks' modelled cost (``weight="cost"``) or their measured seconds per step in the
+        step kernels (``weight="time"``) differ by more than ``rebalance``, so that a long
+        call keeps its ranks busy while the bodies move (a hopper emptying, a bed sliding).
+        Two floats per rank decide; a re-cut gathers each rank's owned centres and costs
+        (four floats per body, not the whole state) and bisects them on every rank alike;
+        the migration that follows moves the bodies to their new owners. Returns whether
+        it cut."""
+        if self.fixed_boxes is not None or steps == 0:
+            return False
+        from mpi4py import MPI
+
+        comm, P, me = self.comm, self.ranks, self.rank
+        weight = self._owned_cost()
+        n_own = self.local.n_owned
+        mine = np.array([weight.sum(), work / steps, n_own])
+        every = np.empty((P, 3))
+        comm.Allgather([mine, MPI.DOUBLE], [every, MPI.DOUBLE])
+        due = dec.imbalance(every[:, 0]) > self.rebalance
+        if self.weight == "time":
+            due = dec.imbalance(every[:, 1]) > self.rebalance
+            # each rank's bodies at its measured seconds per unit of cost (LIGGGHTS'
+            # time-weighted rcb), relative to the mean rank's
+            rate = np.where(every[:, 0] > 0, every[:, 1] / np.maximum(every[:, 0], 1e-300),
+                            0.0)
+            if np.all(rate > 0):
+                weight = weight * rate[me] / rate.mean()
+        if not due:
+            return False
+        rows = np.empty((n_own, 4))
+        rows[:, :3] = self.local.bodies.position[:n_own]
+        rows[:, 3] = weight
+        sizes = 4 * every[:, 2].astype(np.int64)
+        allrows = np.empty((int(sizes.sum()) // 4, 4))
+        comm.Allgatherv([rows, MPI.DOUBLE],
+                        [allrows, mpi_counts(sizes, "re-cut"), MPI.DOUBLE])
+        self.boxes = dec.bisect(allrows[:, :3], allrows[:, 3], P, self._layer())
+        return True
 
     # ------------------------------------------------------------------ migration
     def _migrate(self) -> None:
