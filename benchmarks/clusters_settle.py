@@ -27,6 +27,9 @@ settled bed, timed apart), dpm on 1 thread from every start and on 2 threads fro
 first (``DPM_THREADS`` in subprocesses and ``sim.threads`` set: a scene under
 ``dpm.simulation.SMALL_SCENE`` (4,000) elements runs one thread otherwise; each after a
 warm-up run in the same process that compiles or loads the cache), LIGGGHTS on one core;
+then, in the 2-thread process after its window, one and two threads in turn on the same
+settled bed (3 x 2,000 steps each; the ratio of the medians: the thread gain free of the
+differences between two processes' beds, their rebuilds and a load change between them);
 peak resident memory (ru_maxrss, os.wait4) of each process, per body. The machine may be
 shared while this runs (stated in the JSON).
 
@@ -62,6 +65,8 @@ SKIN = 4e-4
 R_BOUND = A * np.sqrt(3) + R
 #: thermo / sampling interval [steps], steps of the settled window timed apart
 EVERY, WINDOW = 1000, 10000
+#: the settled bed after the window, one and two threads in turn in the 2-thread process
+AB_STEPS, AB_REPEATS = 2000, 3
 SEEDS = (32452843, 86028121, 15485867)
 #: volume fraction of the bounding spheres in the insertion region (what insert/pack reaches)
 INSERT_FRACTION = 0.4
@@ -274,11 +279,30 @@ def worker(start_file: str, geo_json: str, out_file: str) -> None:
         done += k
         steps.append(done + 1)
         heights.append(float(sim.bodies.position[:, 2].mean()))
+    r0 = sim.rebuild_count
     c0 = time.perf_counter()
     sim.run(steps=geo["window_steps"], progress=False)
     window = time.perf_counter() - c0
+    window_rebuilds = sim.rebuild_count - r0
     steps.append(done + 1 + geo["window_steps"])
     heights.append(float(sim.bodies.position[:, 2].mean()))
+    ab = None
+    if threads > 1:
+        # one and two threads in turn on the same settled bed in this process (after the
+        # window): the thread gain free of the differences between two processes' beds
+        # and of a load change between them
+        ab = {"steps_each": AB_STEPS, "us_per_step": {"1": [], str(threads): []},
+              "rebuilds": {"1": [], str(threads): []}}
+        for _ in range(AB_REPEATS):
+            for th in (1, threads):
+                sim.threads = th
+                r0 = sim.rebuild_count
+                c0 = time.perf_counter()
+                sim.run(steps=AB_STEPS, progress=False)
+                ab["us_per_step"][str(th)].append((time.perf_counter() - c0) / AB_STEPS * 1e6)
+                ab["rebuilds"][str(th)].append(sim.rebuild_count - r0)
+        ab["ratio_of_medians"] = (float(np.median(ab["us_per_step"]["1"]))
+                                  / float(np.median(ab["us_per_step"][str(threads)])))
     Path(out_file).write_text(json.dumps({
         "bodies": n, "spheres": len(sim.elements), "threads": threads,
         "step": steps, "mean_z_m": heights, "final_mean_z_m": heights[-1],
@@ -286,7 +310,8 @@ def worker(start_file: str, geo_json: str, out_file: str) -> None:
         "loop_s": {"settle": loop, "window": window},
         "body_steps_per_s": {"settle": n * settle / loop,
                              "window": n * geo["window_steps"] / window},
-        "time_to_first_steps_s": first, "neighbour_rebuilds": sim.rebuild_count}))
+        "time_to_first_steps_s": first, "neighbour_rebuilds": sim.rebuild_count,
+        "window_rebuilds": window_rebuilds, "threads_in_turn": ab}))
 
 
 def run_dpm(start_file: Path, geo: dict, threads: int) -> dict:
@@ -346,7 +371,11 @@ def plot(result: dict, path: Path) -> None:
             if v:
                 names.append(f"{lab}\n{'falling' if phase == 'settle' else 'settled'}")
                 vals.append(v)
-    bars = ax[2].bar(range(len(vals)), vals, color=["C0", "C1"] * 3)
+    turn = result["speed_ratios"].get("dpm_2_threads_over_1_thread_in_turn")
+    if turn:
+        names.append("dpm 2t/1t\nsettled,\nin turn")
+        vals.append(turn)
+    bars = ax[2].bar(range(len(vals)), vals, color=(["C0", "C1"] * 4)[:len(vals)])
     ax[2].set_xticks(range(len(vals)), names, fontsize=7)
     ax[2].bar_label(bars, labels=[f"{v:.2f}" for v in vals])
     ax[2].axhline(1.0, color="0.5", lw=0.8)
@@ -423,6 +452,8 @@ def main(argv: list[str] | None = None) -> dict:
     lg, dm = mean_rate(runs), mean_rate(dpm_runs)
     speed = {"dpm_over_liggghts": ratio(dm, lg), "dpm_2_threads_over_liggghts": ratio(d2, lg),
              "dpm_2_threads_over_1_thread": ratio(d2, d1),
+             "dpm_2_threads_over_1_thread_in_turn": (d2.get("threads_in_turn") or {}).get(
+                 "ratio_of_medians") if d2 else None,
              "note": "dpm 1 thread and LIGGGHTS: means over the runs (one per start)"}
     physics = None
     if runs:
@@ -450,11 +481,11 @@ def main(argv: list[str] | None = None) -> dict:
                            "restitution": RESTITUTION, "friction": FRICTION},
               "geometry": geo, "seeds": list(SEEDS) if runs else None,
               "machine": platform.processor() or platform.machine(), "cores": os.cpu_count(),
-              "timing_note": "2-core machine shared with other jobs (a CI run and another "
-                             "worker) while this ran: timings are noisy; dpm threads given "
-                             "(DPM_THREADS in subprocesses, sim.threads set) after a "
+              "timing_note": "2-core machine (load average in load_average); dpm "
+                             "threads given (DPM_THREADS in subprocesses, sim.threads set) after a "
                              "warm-up that compiles; LIGGGHTS one core; ru_maxrss includes "
                              "each process's base (Python + numba for dpm)",
+              "load_average": os.getloadavg(),
               "physics": physics, "speed_ratios": speed, "memory": mem,
               "dpm": dpm_runs, "dpm_2_threads": d2, "liggghts": runs or None}
     RESULTS.mkdir(exist_ok=True)
