@@ -132,9 +132,10 @@ def test_each_contact_keeps_its_history(model):
                 np.testing.assert_array_equal(wc.history[q], walls[int(sim.bodies.id[e.owner[i]])])
 
 
-def _pile(permute_at: int | None, steps: int = 1500):
+def _pile(permute_at: int | None, steps: int = 1500, device=None):
     """Spheres and clustered bodies jostling in a box: many contacts per body."""
-    sim = dpm.Simulation(dt=2e-6, gravity=(0, 0, -9.81), threads=1)
+    sim = dpm.Simulation(dt=2e-6, gravity=(0, 0, -9.81), threads=1,
+                         **({} if device is None else {"device": device}))
     g = dpm.Material("glass", **GLASS)
     sim.contact(g, g, model="hertz_mindlin", restitution=0.4, friction=0.5)
     sim.add_boundary("box", material=g, lower=(0, 0, 0), upper=(0.016, 0.016, 0.03),
@@ -170,3 +171,31 @@ def test_permute_refuses_what_is_not_a_permutation():
     for bad in (np.zeros(n, int), np.arange(n - 1), np.arange(n) + 0.5):
         with pytest.raises(dpm.ParameterError, match="permutation"):
             sim.permute(bad)
+
+
+def test_renumbering_in_cell_order_changes_only_rounding():
+    """``CpuBackend(sort_every=1)``: the pile renumbered in cell order at every list
+    rebuild runs as the unsorted pile, to rounding; its rows end in cell order."""
+    from dpm.backends import CpuBackend
+
+    ref = _pile(None)
+    ref_rebuilds = ref.rebuild_count
+    got = _pile(None, device=CpuBackend(threads=1, sort_every=1))
+    assert got.rebuild_count == ref_rebuilds > 3
+    assert np.any(got.bodies.id != np.arange(len(got.bodies)))  # rows did move
+    for a, b in zip(_by_id(ref)[:4], _by_id(got)[:4], strict=True):
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-9 * max(np.abs(a).max(), 1.0))
+
+
+def test_large_scenes_are_renumbered_by_default():
+    from dpm.backends import CpuBackend
+    from dpm.backends.cpu import SMALL_SCENE, SORT_EVERY
+
+    auto = CpuBackend()
+    assert auto.sort_interval(SMALL_SCENE - 1) == 0
+    assert auto.sort_interval(SMALL_SCENE) == SORT_EVERY > 0
+    assert CpuBackend(sort_every=0).sort_interval(10**6) == 0
+    assert CpuBackend(sort_every=3).sort_interval(10) == 3
+    for bad in (-1, 2.5, True, "20"):
+        with pytest.raises(dpm.ParameterError, match="sort_every"):
+            CpuBackend(sort_every=bad)

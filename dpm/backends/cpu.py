@@ -34,6 +34,12 @@ from .records import (
 
 #: scenes with fewer elements run on one thread unless ``threads`` is given
 SMALL_SCENE = 4000
+#: list rebuilds between renumberings of the bodies in cell order, by default, for scenes
+#: of at least ``SMALL_SCENE`` elements: bodies inserted or mixed out of order (an inlet,
+#: a LIGGGHTS start, a drum) put a body's partners far apart in memory, which cost a
+#: settled bed of 2,000 clusters 1.34x on two threads against 1.91x in cell order
+#: (benchmarks/NOTES.md row 41)
+SORT_EVERY = 20
 #: the force forms (``force_pass``)
 FORCE_PASSES = ("auto", "fused", "two_pass")
 
@@ -66,11 +72,13 @@ class CpuBackend:
         and two passes otherwise; "two_pass" always sums through force rows (for
         comparisons and profiles: the sums are the same bit for bit). May be changed
         between runs.
-    sort_every : int
+    sort_every : int, optional
         Renumber the bodies in the order of the contact-search cells they lie in after
-        every ``sort_every`` list rebuilds (0, the default: never), so that neighbours
-        sit close in memory (:meth:`sort_by_cell`). Rows of ``sim.bodies`` then change
-        order (ids do not); the sums of a body's forces may change by rounding.
+        every ``sort_every`` list rebuilds (0: never), so that neighbours sit close in
+        memory (:meth:`sort_by_cell`). Default: every ``SORT_EVERY`` (20) rebuilds in
+        scenes of at least ``SMALL_SCENE`` elements, never in smaller ones. Rows of
+        ``sim.bodies`` then change order (ids do not: find a body by its id); the sums
+        of a body's forces may change by rounding.
     kernels : {"auto", "scene", "universal"}, optional
         Which step module runs the scene (:mod:`dpm.warm`): "scene", its own (compiled
         at its first run, then cached); "universal", the integrator's module for every
@@ -86,13 +94,16 @@ class CpuBackend:
     universal_ok = True
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
-                 sort_every: int = 0, kernels: str | None = None) -> None:
+                 sort_every: int | None = None, kernels: str | None = None) -> None:
         if force_pass not in FORCE_PASSES:
             raise ParameterError(f"CpuBackend(): force_pass={force_pass!r}; allowed: "
                                  f"{', '.join(FORCE_PASSES)}")
-        if not (isinstance(sort_every, int) and sort_every >= 0):
-            raise ParameterError(f"CpuBackend(): sort_every={sort_every!r} must be an "
-                                 "integer >= 0 (0: never)")
+        if not (sort_every is None or (isinstance(sort_every, int)
+                                       and not isinstance(sort_every, bool)
+                                       and sort_every >= 0)):
+            raise ParameterError(f"CpuBackend(): sort_every={sort_every!r} must be None "
+                                 f"(every {SORT_EVERY} rebuilds from {SMALL_SCENE} "
+                                 "elements, else never) or an integer >= 0 (0: never)")
         self.threads = threads
         self.force_pass = force_pass
         self.kernel_choice = warm.kernels_choice(kernels)
@@ -320,11 +331,21 @@ class CpuBackend:
         d[1] = ran
         self._after_call()
         out = self._result(ran)
-        if self.sort_every:
+        every = self.sort_interval(len(self.sim.elements))
+        if every:
             self._rebuilds_since_sort += out.rebuilds
-            if self._rebuilds_since_sort >= self.sort_every:
+            if self._rebuilds_since_sort >= every:
                 self.sort_by_cell()
         return out
+
+    def sort_interval(self, n_elements: int) -> int:
+        """List rebuilds between renumberings in cell order for a scene of
+        ``n_elements`` elements (0: never): ``sort_every`` if given, else ``SORT_EVERY``
+        from ``SMALL_SCENE`` elements (as LIGGGHTS' ``atom_modify sort``, on by default)
+        and never below, where the whole scene sits in the caches."""
+        if self.sort_every is not None:
+            return int(self.sort_every)
+        return SORT_EVERY if n_elements >= SMALL_SCENE else 0
 
     def sort_by_cell(self) -> None:
         """Renumber the bodies in the order of the cell (half the contact-search cell,

@@ -15,7 +15,9 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
 - **Sub-domains**: orthogonal recursive bisection (:mod:`dpm.parallel.decomposition`)
   over the bodies' measured cost (elements plus listed contacts), redone at a call's
   start when the ranks' step times differ by more than ``rebalance`` (LIGGGHTS' ``fix
-  balance`` threshold; 1.1 by default), and always after the population changed.
+  balance`` threshold; 1.1 by default), always after the population changed, and at a
+  list rebuild inside a call when the ranks' modelled costs (or, ``weight="time"``,
+  their seconds per step) differ by more than ``rebalance`` (:meth:`_recut_in_call`).
 - **Ownership and ghosts**: a rank owns the bodies whose centre lies in its box and holds
   as ghosts every body of another rank with a listed contact partner among its own
   elements (at a call's start), or within 2 r_max + skin (+ the body's own extent) of its
