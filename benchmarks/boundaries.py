@@ -6,7 +6,9 @@
    centres near a primitive of each kind. The step itself compiles a ``closest`` of the
    scene's kinds only, which dispatches the same inlined functions.
 2. Meshes: flat floors of 2 to ~2e5 triangles (cells of 4 mm split in two, the floor grows
-   with the count) under up to 2000 spheres (r = 2 mm) resting on it (no gravity, touching).
+   with the count) under up to 2000 spheres (r = 2 mm) resting on it (no gravity, touching);
+   and a second series, the same 2000 spheres on one 210 mm floor meshed by 200 to ~2e5
+   triangles (cells of 21 to 0.66 mm: a part's mesh resolution at a fixed scene).
    We time (a) the candidate search (counting pass of the grid search) per sphere and (b) the
    step (contact pass with the mesh edge rules, no rebuild) per sphere. With triangles of
    bounded size the grid makes both independent of the triangle count; the table also
@@ -51,6 +53,9 @@ R = 2e-3
 #: default, 0.2 d = 0.8 mm here, would list about twice the triangles per sphere)
 SKIN = 4e-4
 FAR = 10.0
+#: side of the floor of the fixed-floor series: 2,000 spheres on a lattice of 45 x 45 at
+#: 2.2 r (198 mm) and their radius inside it
+FIXED_FLOOR = 0.21
 
 
 @numba.njit(cache=False)
@@ -160,10 +165,14 @@ def run_liggghts(verts, faces, pos, steps: int, repeats: int = 3) -> dict | None
 
 
 def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000, sphere_steps: float = 1e6,
-                 liggghts: bool = False) -> list[dict]:
+                 liggghts: bool = False, side: float | None = None) -> list[dict]:
+    """Rows of the floor of m x m cells for m in ``sizes``: cells of 4 mm (the floor
+    grows with m and holds up to ``n_spheres``), or, with ``side``, a floor of that side
+    whatever m (the same spheres on a coarser or finer mesh of the same floor)."""
     rows = []
     for m in sizes:
-        verts, faces = grid_floor(m)
+        cell = 4e-3 if side is None else side / m
+        verts, faces = grid_floor(m, cell)
         a = dpm.Material("glass", density=2500.0, young=5e6, poisson=0.45)
         w = dpm.Material("steel", density=7800.0, young=2e7, poisson=0.3)
         sim = dpm.Simulation(dt=2e-6, gravity=(0, 0, 0), dt_check="off", threads=1,
@@ -173,7 +182,7 @@ def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000, sphere_steps: 
         t0 = time.perf_counter()
         sim.add_boundary("mesh", material=w, vertices=verts, faces=faces)
         sentinels(sim, w)
-        half = 0.5 * m * 4e-3
+        half = 0.5 * m * cell
         rng = np.random.default_rng(1)
         # spheres on a jittered lattice (spacing 2.2 r) over the middle of the floor
         k = max(1, min(int(math.ceil(math.sqrt(n_spheres))), int(2 * half / (2.2 * R))))
@@ -213,7 +222,8 @@ def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000, sphere_steps: 
             if sim.rebuild_count == r0:
                 best = min(best, el)
         entries = int(sim.wall_contacts.count)
-        rows.append(dict(triangles=len(faces), spheres=len(pos), prepare_s=prep,
+        rows.append(dict(triangles=len(faces), spheres=len(pos), cell_m=cell,
+                         floor_m=m * cell, prepare_s=prep,
                          rebuild_us_per_sphere=rebuild * 1e6,
                          step_us_per_sphere=best / nsteps / len(pos) * 1e6, steps=nsteps,
                          candidates_per_sphere=entries / len(pos)))
@@ -258,6 +268,22 @@ def plot(res: dict, path: Path) -> None:
                          color="tab:gray")
     ax2.loglog(tri, [r["prepare_s"] / r["triangles"] * 1e6 for r in rows], "^--",
                label="prepare per triangle (once)")
+    fixed = res.get("mesh_fixed_floor") or []
+    if fixed:
+        ft = [r["triangles"] for r in fixed]
+        ax2.loglog(ft, [r["step_us_per_sphere"] for r in fixed], "s-", color="tab:red",
+                   label=f"step per sphere, {fixed[0]['spheres']} spheres on one "
+                         f"{fixed[0]['floor_m'] * 1e3:.0f} mm floor")
+        flg = [r for r in fixed if "liggghts_step_us_per_sphere" in r]
+        if flg:
+            ax2.loglog([r["triangles"] for r in flg],
+                       [r["liggghts_step_us_per_sphere"] for r in flg], "D--",
+                       color="tab:pink", label="LIGGGHTS, the same floor")
+            for r in flg:
+                ax2.annotate(f"{r['ratio_dpm_over_liggghts']:.2f}x",
+                             (r["triangles"], r["step_us_per_sphere"]),
+                             textcoords="offset points", xytext=(0, 6), ha="center",
+                             fontsize=7, color="tab:red")
     t = np.array(tri, float)
     base = rows[0]["rebuild_us_per_sphere"]
     ax2.loglog(t, base * (1 + np.log(t / t[0])), ":", color="gray",
@@ -290,6 +316,10 @@ def main() -> None:
     print(res["per_kind_ns"], flush=True)
     mesh_scaling([1], n_spheres=1, steps=5, sphere_steps=0)  # compile / load the step module first
     res["mesh"] = mesh_scaling(sizes, liggghts=not args.no_liggghts)
+    # the same 2,000 spheres on one floor (a little wider than the lattice they rest on)
+    # meshed by 200 to ~2e5 triangles: a CAD part's mesh resolution at a fixed scene
+    res["mesh_fixed_floor"] = mesh_scaling([10, 32, 100, 316] if not args.quick else [10],
+                                           liggghts=not args.no_liggghts, side=FIXED_FLOOR)
     res["liggghts"] = (None if args.no_liggghts or shutil.which("liggghts") is None else
                        subprocess.run(["liggghts", "-h"], capture_output=True, text=True)
                        .stdout.split("\n\n")[0].strip()[:120])
