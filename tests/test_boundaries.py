@@ -34,6 +34,7 @@ import trimesh
 from scipy.optimize import brentq
 
 import dpm
+from dpm.boundaries.mesh import triangle_duals
 from dpm.kernels.boundary_geometry import AXI, SIEVE, SLAB, TORUS, TRIANGLE, closest_any
 from dpm.kernels.boundary_search import brute_force_boundary_pairs
 
@@ -696,7 +697,7 @@ def test_triangle_closest_point_matches_trimesh():
     """Closest point of random (also obtuse and slender) triangles to random points: the
     point x - dist n equals trimesh.triangles.closest_point's to 1e-12 of the size, and the
     feature code (face / edge k / vertex k) matches the barycentric coordinates of trimesh's
-    point."""
+    point; with and without the dual vectors of the kernel's face test."""
     rng = np.random.default_rng(11)
     checked = {"face": 0, "edge": 0, "vertex": 0}
     for _ in range(60):
@@ -710,6 +711,8 @@ def test_triangle_closest_point_matches_trimesh():
         par = np.zeros(20)
         par[0:9] = v.ravel()
         par[10:13] = n
+        if rng.random() < 0.5:  # with the dual vectors (the face test first) or without
+            par[13:19] = triangle_duals(v[None])[0]
         pts = rng.normal(size=(100, 3)) * 1.5
         # (trimesh.proximity.closest_point runs this after an rtree broad phase)
         ref = trimesh.triangles.closest_point(np.repeat(v[None], len(pts), 0), pts)

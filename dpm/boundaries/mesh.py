@@ -281,6 +281,25 @@ def feature_flags(tm, faces: np.ndarray, n_vertices: int) -> np.ndarray:
     return flags
 
 
+def triangle_duals(v: np.ndarray) -> np.ndarray:
+    """(m, 6): the dual in-plane vectors g1, g2 of triangles ``v`` (m, 3, 3), g_i . e_j =
+    delta_ij for the edges e1 = v1 - v0, e2 = v2 - v0 and g_i in their plane, so that a
+    point's barycentric coordinates are two dot products (the kernel's face test, see
+    :mod:`dpm.kernels.boundary_geometry`). Zero for a degenerate triangle: the kernel then
+    takes the general closest-point path."""
+    e1 = v[:, 1] - v[:, 0]
+    e2 = v[:, 2] - v[:, 0]
+    a = np.einsum("ij,ij->i", e1, e1)
+    b = np.einsum("ij,ij->i", e1, e2)
+    c = np.einsum("ij,ij->i", e2, e2)
+    det = a * c - b * b
+    ok = det > 1e-24 * np.maximum(a * c, 1e-300)
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)[:, None]
+    g1 = (c[:, None] * e1 - b[:, None] * e2) * inv
+    g2 = (a[:, None] * e2 - b[:, None] * e1) * inv
+    return np.concatenate([g1, g2], axis=1)
+
+
 def triangle_primitives(vertices: np.ndarray, faces: np.ndarray, h: float,
                         flags: np.ndarray) -> Primitives:
     """TRIANGLE primitives of a mesh with half thickness ``h`` and feature ``flags``."""
@@ -292,6 +311,7 @@ def triangle_primitives(vertices: np.ndarray, faces: np.ndarray, h: float,
     par[:, 0:9] = v.reshape(m, 9)
     par[:, 9] = h
     par[:, 10:13] = n
+    par[:, 13:19] = triangle_duals(v)
     ids = np.zeros((m, 4), np.int64)
     ids[:, :3] = faces
     ids[:, 3] = flags

@@ -131,7 +131,7 @@ AXI = register_primitive(PrimitiveKind(bg.AXI, "axi", 12, (BUILTIN_MODULE, "axi_
 TORUS = register_primitive(PrimitiveKind(bg.TORUS, "torus", 14,
                                          (BUILTIN_MODULE, "torus_distance"),
                                          returns_feature=True, joinable=True))
-TRIANGLE = register_primitive(PrimitiveKind(bg.TRIANGLE, "triangle", 13,
+TRIANGLE = register_primitive(PrimitiveKind(bg.TRIANGLE, "triangle", 19,
                                             (BUILTIN_MODULE, "triangle_distance"),
                                             returns_feature=True))
 SIEVE = register_primitive(PrimitiveKind(bg.SIEVE, "sieve", 17,

@@ -39,8 +39,13 @@ TORUS (3)     bend: centre c [0:3], unit axis a [3:6] (normal of the bend plane)
               dist = |(rho' - rp, w_t)| - h in the pipe's cross-section plane, so the pipe's
               end rings are rounded edges; inside and outside both touch.
 TRIANGLE (4)  vertices v0 [0:3], v1 [3:6], v2 [6:9], half thickness h [9], unit face
-              normal [10:13]. Closest point of the triangle (Ericson, Real-Time Collision
-              Detection, 2005, 5.1.5) with its feature; both sides touch.
+              normal [10:13], dual in-plane vectors g1 [13:16], g2 [16:19] (g_i . e_j =
+              delta_ij for the edges e1 = v1 - v0, e2 = v2 - v0, g_i . n = 0; zero for a
+              row written without them). Closest point of the triangle (Ericson, Real-Time
+              Collision Detection, 2005, 5.1.5) with its feature; both sides touch. A
+              centre over the triangle's inside (barycentric coordinates s = (x - v0) . g1,
+              t = (x - v0) . g2 with s > 0, t > 0, s + t < 1) is a face contact at the
+              height (x - v0) . n, found with three dot products before that test.
 SIEVE (5)     screen plate of a hole-clearance model: centre c [0:3], axes u [3:6], v [6:9],
               half extents a [9], b [10], half thickness h [11], hole width wh [12], pitch
               p [13] (hole + bar; holes centred at c + (i u + j v) p), hole shape [14]
@@ -377,12 +382,22 @@ def triangle_closest(p, x, y, z):
 
 @inline_jit
 def triangle_distance(p, x, y, z):
+    px = x - p[0]
+    py = y - p[1]
+    pz = z - p[2]
+    s = px * p[13] + py * p[14] + pz * p[15]
+    t = px * p[16] + py * p[17] + pz * p[18]
+    fnx, fny, fnz = p[10], p[11], p[12]
+    if s > 0.0 and t > 0.0 and s + t < 1.0:  # over the inside: a face contact
+        hgt = px * fnx + py * fny + pz * fnz
+        if hgt < 0.0:
+            return -hgt - p[9], -fnx, -fny, -fnz, FACE
+        return hgt - p[9], fnx, fny, fnz, FACE
     qx, qy, qz, feature = triangle_closest(p, x, y, z)
     ex = x - qx
     ey = y - qy
     ez = z - qz
     d = math.sqrt(ex * ex + ey * ey + ez * ez)
-    fnx, fny, fnz = p[10], p[11], p[12]
     if d > 0.0:
         inv = 1.0 / d
         ex *= inv

@@ -399,21 +399,33 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
     q0 = wl_start[i]
     q1 = wl_start[i + 1]
     if HAS_TRIANGLES:
-        meshes = False
+        # the mesh rules have work only where two triangle entries touch, one touches at
+        # an edge or vertex, or a contact starts while another ends (history hand-over);
+        # one face contact alone (most entries on a meshed floor) skips that call
+        touching_tri = 0
+        rules = False
+        starts = False
+        ends = False
         for q in range(q0, q1):
             w = wl_w[q]
             if w_kind[w] == TRIANGLE:
-                meshes = True
                 lx, ly, lz = to_local(row18(f_cur, w_owner[w]), xi, yi, zi)
                 dist, lnx, lny, lnz, feature = closest(TRIANGLE, row20(w_par, w), lx, ly, lz,
                                                        ri)
-                wl_tag[q] = feature if dist < (ri + reach if RANGED else ri) else -1
+                tag = feature if dist < (ri + reach if RANGED else ri) else -1
+                wl_tag[q] = tag
+                if tag >= 0:
+                    touching_tri += 1
+                    rules = rules or tag > 0
+                    starts = starts or not wl_active[q]
+                else:
+                    ends = ends or wl_active[q] != 0
                 # kept for the contact loop below, which rewrites the row in any case
                 wl_f[q, 0] = dist
                 wl_f[q, 1] = lnx
                 wl_f[q, 2] = lny
                 wl_f[q, 3] = lnz
-        if meshes:
+        if touching_tri > 1 or rules or (starts and ends):
             resolve_triangle_contacts(q0, q1, wl_w, wl_tag, w_kind, w_owner, w_ids,
                                       w_par, wl_active, wl_hist)
     if HAS_JOINTS:
