@@ -29,6 +29,7 @@ from . import kernels
 _BEGIN = "# --- bindings begin (dpm.plan rewrites this block) ---"
 _END = "# --- bindings end ---"
 _LOADED: dict[str, ModuleType] = {}
+_PLACEMENT: dict[tuple[int, ...], ModuleType] = {}
 
 
 def cache_dir() -> Path:
@@ -366,6 +367,20 @@ def step_module(laws: list[tuple[str, str]], integrator_module: str,
     # the modules the bindings import: laws, integrator, plugin geometry functions
     geometry = {primitive_kind(k).function[0] for k in set(kinds or [])}
     return _load(src, _law_modules(laws) | {integrator_module} | geometry, "dpm_step")
+
+
+def placement_module(kinds: list[int]) -> ModuleType:
+    """Import (generating if needed) the inlets' placement test
+    (:mod:`dpm.kernels.placement`) for these boundary kinds (remembered per process: an
+    inlet asks at every flow event)."""
+    from .boundaries.primitives import primitive_kind
+
+    key = tuple(sorted(set(kinds)))
+    if key not in _PLACEMENT:
+        src = _splice("placement.py", _closest_lines(list(key), False, False))
+        geometry = {primitive_kind(k).function[0] for k in key}
+        _PLACEMENT[key] = _load(src, geometry, "dpm_place")
+    return _PLACEMENT[key]
 
 
 def _load(src: str, modules: set[str], prefix: str) -> ModuleType:

@@ -271,8 +271,6 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
     """Place what ``inlet`` owes now; return the new ids."""
     from scipy.spatial import cKDTree
 
-    from .kernels.boundary_search import boundary_gaps
-
     owed = inlet.owed(sim.time + inlet.every)  # what the coming interval brings
     by_mass = inlet.mass_rate is not None
     if (owed < 1.0 and not by_mass) or owed <= 0.0:
@@ -289,21 +287,50 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
     on = np.array([bd.enabled for bd in sim.boundaries], bool)[table.owner] \
         if len(table.owner) else np.zeros(0, bool)
     p_kind, p_par, p_owner = table.kind[on], table.par[on], table.owner[on]
+    if len(p_kind):  # (the scene's kinds, plugin kinds included; cached on disk)
+        from .plan import placement_module
+
+        boundary_gaps = placement_module(sorted(set(p_kind.tolist()))).boundary_gaps
     imat = sim._material_index(inlet.material, "sim.add_inlet()")
     placed_pos: list[np.ndarray] = []
     placed_r: list[float] = []
     new_ids = []
+    # bodies placed and not yet appended: consecutive draws of the same shape are appended
+    # in one call (appending grows every state array: one body at a time cost O(N) each)
+    pending: list[tuple[np.ndarray, np.ndarray]] = []
+    pending_shape: list[Any] = [None, None]  # (key, shape)
+
+    def flush() -> None:
+        if pending:
+            pos = np.array([p for p, _ in pending])
+            quat = np.concatenate([q for _, q in pending])
+            vel = np.broadcast_to(getattr(inlet, "carry_velocity", inlet.velocity),
+                                  pos.shape).copy()
+            ids = append_bodies(sim, pending_shape[1], imat, inlet.material.density, pos,
+                                vel, np.zeros_like(pos), quat)
+            inlet.placed(sim, ids)
+            new_ids.append(ids)
+            pending.clear()
+
     while (owed >= 1.0) if not by_mass else (owed > 0.0):
-        sh = inlet_shape(sim, *inlet.draw())
+        name, params = inlet.draw()
+        key = (name, repr(sorted(params.items())))
+        if key != pending_shape[0]:
+            flush()
+            pending_shape[:] = [key, inlet_shape(sim, name, params)]
+        sh = pending_shape[1]
         batch = sh.build(1, inlet.material.density)
         rb = float(batch.bounding_radius[0])
         cand = inlet.candidates(rb)
         ok = np.ones(len(cand), bool)
         if tree is not None:
-            for k, hits in enumerate(tree.query_ball_point(cand, rb + rmax)):
-                if hits:
-                    d = np.linalg.norm(b.position[hits] - cand[k], axis=1)
-                    ok[k] = bool(np.all(d >= rb + b.radius[hits]))
+            hits = tree.query_ball_point(cand, rb + rmax)
+            sizes = np.fromiter(map(len, hits), np.int64, len(hits))
+            if sizes.any():
+                near = np.concatenate([h for h in hits if h]).astype(np.int64)
+                k = np.repeat(np.arange(len(cand)), sizes)
+                d = np.linalg.norm(b.position[near] - cand[k], axis=1)
+                ok[k[d < rb + b.radius[near]]] = False
         if placed_pos:
             pp = np.asarray(placed_pos)
             d = np.linalg.norm(cand[:, None, :] - pp[None], axis=2)
@@ -321,17 +348,14 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
         q = (random_quaternions(inlet.rng, 1) if inlet.random_orientation
              else np.array([[1.0, 0, 0, 0]]))
         q = q / np.linalg.norm(q, axis=1)[:, None]  # (as add_particles does)
-        ids = append_bodies(sim, sh, imat, inlet.material.density, p[None],
-                            getattr(inlet, "carry_velocity", inlet.velocity)[None],
-                            np.zeros((1, 3)), q)
-        inlet.placed(sim, ids)
-        new_ids.append(ids)
+        pending.append((p, q))
         placed_pos.append(p)
         placed_r.append(rb)
         m = float(batch.mass[0])
         owed -= m if by_mass else 1.0
         inlet.inserted += 1
         inlet.inserted_mass += m
+    flush()
     out = np.concatenate(new_ids) if new_ids else np.zeros(0, np.int64)
     inlet.ids.append(out)
     return out

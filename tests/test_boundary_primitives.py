@@ -133,3 +133,24 @@ def test_a_sphere_on_a_plugin_ball_obstacle(ball_kind):
     np.testing.assert_allclose(on.force, [0, 0, -m * G], rtol=0, atol=1e-3 * m * G)
     assert p[1, 0] - 0.05 > 2e-3 and sim.bodies.velocity[1, 0] > 0  # away from the axis
     assert off.force[0] < 0 or np.all(off.force == 0)  # pushed towards -x, or already off
+
+
+def test_an_inlet_places_bodies_clear_of_a_plugin_primitive(ball_kind):
+    """The inlets' placement test is generated for the scene's kinds (dpm.kernels.placement),
+    so it knows a plugin kind: an inlet box that a plugin ball fills the middle of gets
+    spheres only outside the ball, many of them within a few radii of its surface."""
+    glass = dpm.Material("glass", density=2500.0, young=5e6, poisson=0.45)
+    steel = dpm.Material("steel", density=7800.0, young=2e8, poisson=0.3)
+    sim = dpm.Simulation(dt=5e-6, gravity=(0, 0, 0))
+    sim.contact(glass, glass, model="hertz_mindlin", restitution=0.1, friction=0.5)
+    sim.contact(glass, steel, model="hertz_mindlin", restitution=0.1, friction=0.5)
+    big, r = 0.01, 1e-3
+    sim.add_boundary(BallObstacle.name, material=steel, center=(0, 0, 0), radius=big)
+    sim.add_inlet(dpm.BoxRegion((-0.012, -0.012, -0.012), (0.012, 0.012, 0.012)), glass,
+                  rate=2e5, radius=r, seed=3, max_attempts=200)
+    sim.run(steps=1, progress=False)
+    dist = np.linalg.norm(sim.bodies.position, axis=1)
+    print(f"{len(dist)} placed, centre distances {dist.min():.5g} .. {dist.max():.5g} m")
+    assert len(dist) > 20
+    assert np.all(dist >= big + r - 1e-12)  # none overlaps the ball
+    assert np.sum(dist < big + 3 * r) > 5  # and the test is not vacuous

@@ -22,8 +22,9 @@ imports only numpy, numba and math: its code is part of the fingerprint of the g
 step module (a changed function gives a new module, not stale cached code).
 
 What a plugin kind does not get (the step's kernels hold these for the built-in kinds):
-``closest_any`` (the inlets' placement test and the brute-force list of the tests) knows
-the built-in kinds only and treats another kind as absent; the hand-over of tangential
+``closest_any`` (the brute-force list of the tests) knows the built-in kinds only and
+treats another kind as absent (the inlets' placement test, :mod:`dpm.kernels.placement`,
+is generated per set of kinds like the step and does know them); the hand-over of tangential
 history across a joined end (``joinable``) is done for AXI and TORUS only; the mesh rules
 for shared edges and vertices are TRIANGLE's.
 """

@@ -17,8 +17,6 @@ it uses the scene's own ``closest`` (only the boundary kinds present are compile
 
 import math
 
-import numpy as np
-
 from .boundary_geometry import closest_any, in_range
 from .config import inline_jit, jit
 
@@ -72,22 +70,4 @@ def brute_force_boundary_pairs(e_pos, e_radius, skin, frame, kind, par, owner):
             d = closest_any(kind[w], par[w], lx, ly, lz, r)[0]
             if in_range(kind[w], d, r, skin):
                 out.append((i, w))
-    return out
-
-
-
-@jit
-def boundary_gaps(points, radii, frame, kind, par, owner):
-    """Smallest dist - r over all primitives for each sphere (inf without boundaries): a
-    negative gap means the sphere would overlap a boundary (or lie behind a plane). A plain
-    loop over primitives, for inlets placing a few bodies."""
-    n = points.shape[0]
-    out = np.full(n, np.inf)
-    for i in range(n):
-        r = radii[i]
-        for w in range(kind.shape[0]):
-            lx, ly, lz = to_local(frame[owner[w]], points[i, 0], points[i, 1], points[i, 2])
-            g = closest_any(kind[w], par[w], lx, ly, lz, r)[0] - r
-            if g < out[i]:
-                out[i] = g
     return out
