@@ -166,7 +166,10 @@ def compile_in_background(plan: Any, fused: bool, sigs: dict[str, list]) -> Path
     path = d / f"compile-{os.getpid()}-{time.time_ns()}.job"
     path.write_bytes(data)
     log = path.with_suffix(".log").open("w")
-    subprocess.Popen([sys.executable, "-c", "import sys, dpm.warm; "
+    # at the lowest priority (nice 19): a run on two or more threads beside it would
+    # otherwise lose a core to it, and threads that wait at each parallel loop's barrier
+    # for a descheduled one made such a run 10-50x slower while the compile lasted
+    subprocess.Popen([sys.executable, "-c", "import os, sys; os.nice(19); import dpm.warm; "
                       "sys.exit(dpm.warm.main(sys.argv[1:]))", str(path)], stdout=log, stderr=log,
                      stdin=subprocess.DEVNULL, start_new_session=True,
                      env=dict(os.environ, DPM_BACKGROUND_COMPILE="0", DPM_THREADS="1"))
