@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numba
 
+os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
+
 HERE = Path(__file__).resolve().parent
 SCENE = HERE / "scenes" / "box_settle"
 RESULTS = HERE / "results"

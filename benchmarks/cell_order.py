@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import time
 from pathlib import Path
 
@@ -21,6 +22,8 @@ import numpy as np
 from box_settle import _example  # noqa: I001  (run from benchmarks/)
 
 from dpm.backends import CpuBackend
+
+os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 HERE = Path(__file__).resolve().parent
 

@@ -33,6 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
+os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
+
 HERE = Path(__file__).resolve().parent
 # the example's scene (loaded by path: this script has the same module name)
 _spec = importlib.util.spec_from_file_location("hopper_example",

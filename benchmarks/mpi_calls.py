@@ -14,9 +14,13 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import os
+
 from box_settle import _example  # noqa: E402
 
 import dpm  # noqa: E402
+
+os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 
 def main(argv: list[str]) -> None:

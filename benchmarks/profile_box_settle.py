@@ -26,7 +26,11 @@ from pathlib import Path
 import numba
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "examples"))
+import os
+
 import box_settle  # noqa: E402
+
+os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 
 def per_step(sim, threads: int, two_pass: bool, orient: bool, steps: int = 100) -> float:

@@ -163,18 +163,66 @@ def compile_in_background(plan: Any, fused: bool, sigs: dict[str, list]) -> Path
         return None
     d = _plan.cache_dir()
     d.mkdir(parents=True, exist_ok=True)
+    # one compile per module at a time: a script that makes many scenes of one kind (a
+    # parameter sweep, a benchmark) would otherwise start one compile of the same module
+    # for each scene while the first is still running
+    busy = Path(plan.module(fused).__file__).with_suffix(".compiling")
+    if not _claim(busy):
+        return None
     path = d / f"compile-{os.getpid()}-{time.time_ns()}.job"
     path.write_bytes(data)
     log = path.with_suffix(".log").open("w")
     # at the lowest priority (nice 19): a run on two or more threads beside it would
     # otherwise lose a core to it, and threads that wait at each parallel loop's barrier
     # for a descheduled one made such a run 10-50x slower while the compile lasted
-    subprocess.Popen([sys.executable, "-c", "import os, sys; os.nice(19); import dpm.warm; "
-                      "sys.exit(dpm.warm.main(sys.argv[1:]))", str(path)], stdout=log, stderr=log,
-                     stdin=subprocess.DEVNULL, start_new_session=True,
-                     env=dict(os.environ, DPM_BACKGROUND_COMPILE="0", DPM_THREADS="1"))
+    child = subprocess.Popen([sys.executable, "-c", "import os, sys; os.nice(19); "
+                              "import dpm.warm; sys.exit(dpm.warm.main(sys.argv[1:]))",
+                              str(path), str(busy)], stdout=log, stderr=log,
+                             stdin=subprocess.DEVNULL, start_new_session=True,
+                             env=dict(os.environ, DPM_BACKGROUND_COMPILE="0",
+                                      DPM_THREADS="1"))
     log.close()
+    busy.write_text(str(child.pid))
     return path
+
+
+def _claim(busy: Path) -> bool:
+    """Create ``busy`` (the marker of a compile in progress) unless a living process holds
+    it; False when one does. A marker whose process is gone (killed) is taken over."""
+    for _ in range(2):
+        try:
+            os.close(os.open(busy, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+            return True
+        except FileExistsError:
+            try:
+                pid = int(busy.read_text() or "0")
+            except (OSError, ValueError):
+                pid = 0
+            if pid == 0 and time.time() - _mtime(busy) < 60.0:
+                return False  # (just claimed: the pid follows)
+            if pid and _alive(pid):
+                return False
+            busy.unlink(missing_ok=True)
+        except OSError:
+            return False
+    return False
+
+
+def _mtime(path: Path) -> float:
+    try:
+        return path.stat().st_mtime
+    except OSError:
+        return 0.0
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 def compile_job(path: Path) -> ModuleType:
@@ -285,6 +333,8 @@ def main(argv: list[str] | None = None) -> int:
         module = compile_job(path)
     finally:
         path.unlink(missing_ok=True)
+        if len(argv) > 1:
+            Path(argv[1]).unlink(missing_ok=True)  # (the compile-in-progress marker)
     print(f"compiled {module.__name__} in {time.perf_counter() - t0:.1f} s", flush=True)
     path.with_suffix(".log").unlink(missing_ok=True)
     return 0

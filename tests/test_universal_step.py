@@ -5,8 +5,10 @@ a background compile); the pair table repacked into the universal layout."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
+import types
 from pathlib import Path
 
 import numpy as np
@@ -124,7 +126,12 @@ def test_auto_takes_the_own_module_when_compiled_else_the_universal(monkeypatch,
     monkeypatch.delenv("DPM_QUIET", raising=False)
     monkeypatch.setenv("DPM_BACKGROUND_COMPILE", "1")
     launched = []
-    monkeypatch.setattr(subprocess, "Popen", lambda cmd, **kw: launched.append(cmd))
+
+    def popen(cmd, **kw):
+        launched.append(cmd)
+        return types.SimpleNamespace(pid=os.getpid())  # (a living process)
+
+    monkeypatch.setattr(subprocess, "Popen", popen)
     _, be = end_state("mixed_laws", "auto")
     assert not be.universal and not launched
     marker = Path(be.module.__file__).with_suffix(".ready")
@@ -134,10 +141,13 @@ def test_auto_takes_the_own_module_when_compiled_else_the_universal(monkeypatch,
     assert be.universal
     assert "universal step kernels" in capsys.readouterr().err
     assert len(launched) == 1
-    job = launched[0][-1]
-    assert Path(job).exists()
-    assert warm.main([job]) == 0  # (what the detached process runs)
-    assert marker.exists() and not Path(job).exists()
+    job, busy = launched[0][-2:]
+    assert Path(job).exists() and Path(busy).read_text() == str(os.getpid())
+    # another scene of the same kind while that compile runs starts none of its own
+    _, be = end_state("mixed_laws", "auto")
+    assert be.universal and len(launched) == 1
+    assert warm.main([job, busy]) == 0  # (what the detached process runs)
+    assert marker.exists() and not Path(job).exists() and not Path(busy).exists()
     _, be = end_state("mixed_laws", "auto")
     assert not be.universal
 
@@ -157,3 +167,16 @@ def test_dpm_compile_names_the_integrators():
     assert "integrator 'rk4'; allowed:" in r.stderr + r.stdout
     assert "velocity_verlet" in r.stderr + r.stdout
     assert "backward_euler" not in warm.integrator_modules()  # (implicit: no own module)
+
+
+def test_a_compile_marker_of_a_dead_process_is_taken_over(tmp_path):
+    """The compile-in-progress marker: held while its process lives; a killed compile's
+    marker (its process gone) does not block the next one."""
+    busy = tmp_path / "m.compiling"
+    assert warm._claim(busy)
+    busy.write_text(str(os.getpid()))
+    assert not warm._claim(busy)  # a living holder
+    done = subprocess.Popen([sys.executable, "-c", "pass"])
+    done.wait()
+    busy.write_text(str(done.pid))
+    assert warm._claim(busy)  # a dead one
