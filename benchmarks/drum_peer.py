@@ -583,9 +583,10 @@ def main(argv: list[str] | None = None) -> dict:
               "surface_fit": SURFACE, "starts": list(STARTS),
               "machine": platform.processor() or platform.machine(), "cores": os.cpu_count(),
               "load_average": [min(loads), max(loads)],
-              "timing_note": "2-core machine shared with other work while this ran: timings "
-                             "are noisy (load average: 1-minute figures sampled between "
-                             "runs); dpm after a warm-up that compiles; LIGGGHTS one core",
+              "timing_note": ("load_average: 1-minute figures sampled between runs (on 2 "
+                              "cores, above ~1.2 another process shared the machine and the "
+                              "timings are noisy; the 2-thread intervals themselves lift "
+                              "it); dpm after a warm-up that compiles; LIGGGHTS one core"),
               "physics": physics, "speed": speed, "memory_max_rss": mem,
               "dpm_compile_or_load": prep, "runs": runs}
     RESULTS.mkdir(exist_ok=True)

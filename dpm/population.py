@@ -314,7 +314,10 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
 
     while (owed >= 1.0) if not by_mass else (owed > 0.0):
         name, params = inlet.draw()
-        key = (name, repr(sorted(params.items())))
+        # (drawn values are numbers; the others are the inlet's own objects, the same at
+        # every draw of one shape entry: compared by identity, never by a truncated repr)
+        key = (name, tuple((k, v if isinstance(v, int | float | str) else id(v))
+                           for k, v in sorted(params.items())))
         if key != pending_shape[0]:
             flush()
             pending_shape[:] = [key, inlet_shape(sim, name, params)]
