@@ -70,7 +70,8 @@ def run_liggghts(lat, steps):
         shutil.copy(SCENE / "box_settle.liggghts", tmp)
         t0 = time.perf_counter()
         out = subprocess.run([exe, "-in", "box_settle.liggghts", "-var", "DATA",
-                              f"box_settle_{n}.data", "-var", "STEPS", str(steps)], cwd=tmp,
+                              f"box_settle_{lat[0]}x{lat[1]}x{lat[2]}.data", "-var", "STEPS",
+                              str(steps)], cwd=tmp,
                              check=True, capture_output=True, text=True,
                              env={**os.environ, "OMP_NUM_THREADS": "1"}).stdout
         whole = time.perf_counter() - t0

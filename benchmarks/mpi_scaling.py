@@ -121,7 +121,8 @@ def run_liggghts(lat, steps: int, ranks: int, tmp: Path):
                    check=True, capture_output=True)
     n = lat[0] * lat[1] * lat[2]
     shutil.copy(SCENE / "box_settle.liggghts", work)
-    cmd = [exe, "-in", "box_settle.liggghts", "-var", "DATA", f"box_settle_{n}.data",
+    cmd = [exe, "-in", "box_settle.liggghts", "-var", "DATA",
+           f"box_settle_{lat[0]}x{lat[1]}x{lat[2]}.data",
            "-var", "STEPS", str(steps)]
     if ranks > 1:  # (the Debian package's own Open MPI launcher)
         mpirun = "/usr/bin/mpirun" if Path("/usr/bin/mpirun").exists() else "mpirun"

@@ -28,8 +28,9 @@ LIGGGHTS_MEAN_Z = 0.021270  # m, after 20,000 steps of the 10,000-sphere scene
 
 
 def initial_packing(nx: int, ny: int, nz: int, workdir: Path = SCENE_DIR) -> Path:
-    """Path of box_settle_N.csv for an nx x ny x nz lattice (written by gen_init.py)."""
-    csv = workdir / f"box_settle_{nx * ny * nz}.csv"
+    """Path of box_settle_NXxNYxNZ.csv for an nx x ny x nz lattice (written by gen_init.py;
+    named by the lattice: two lattices of one sphere count are different scenes)."""
+    csv = workdir / f"box_settle_{nx}x{ny}x{nz}.csv"
     if not csv.exists():
         workdir.mkdir(parents=True, exist_ok=True)
         subprocess.run([sys.executable, str(SCENE_DIR / "gen_init.py"), str(nx), str(ny),
