@@ -1005,9 +1005,51 @@ def _text(value: Any) -> str | None:
     return value.decode() if isinstance(value, bytes) else str(value)
 
 
+#: metadata read attempts of a SWMR reader. HDF5's default is 100, each failed checksum
+#: followed by a sleep that starts at 1 ns and doubles (H5C__load_entry), so a block that
+#: a killed writer left half-written made a read sleep for ever (seen once in
+#: tests/test_output_safety.py); 30 attempts give a writer racing the reader about a
+#: second in all, then the read fails with an error
+READ_ATTEMPTS = 30
+
+
+def _swmr_read_fapl() -> Any:
+    """A file access property list for SWMR reads with :data:`READ_ATTEMPTS` (set through
+    the HDF5 library h5py loaded: h5py does not wrap ``H5Pset_metadata_read_attempts``);
+    None if that library cannot be reached (the default attempts then apply)."""
+    global _FAPL
+    if _FAPL is None:
+        import ctypes
+        import glob
+
+        fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+        fapl.set_libver_bounds(h5py.h5f.LIBVER_LATEST, h5py.h5f.LIBVER_LATEST)
+        _FAPL = False
+        here = os.path.dirname(h5py.__file__)
+        for lib in sorted(glob.glob(os.path.join(here, "..", "h5py.libs", "libhdf5-*.so*"))
+                          + [h5py.h5.__file__]):
+            try:
+                fn = ctypes.CDLL(lib).H5Pset_metadata_read_attempts
+            except (OSError, AttributeError):
+                continue
+            fn.argtypes = [ctypes.c_int64, ctypes.c_uint]
+            if fn(fapl.id, READ_ATTEMPTS) >= 0:
+                _FAPL = fapl
+                break
+    return _FAPL or None
+
+
+_FAPL: Any = None
+
+
 def _open(path: Path) -> h5py.File:
     # swmr=True reads a file that a writer still holds open or that a killed run left behind
-    return h5py.File(path, "r", libver="latest", swmr=True)
+    fapl = _swmr_read_fapl()
+    if fapl is None:
+        return h5py.File(path, "r", libver="latest", swmr=True)
+    fid = h5py.h5f.open(os.fsencode(path), h5py.h5f.ACC_RDONLY | h5py.h5f.ACC_SWMR_READ,
+                        fapl=fapl)
+    return h5py.File(fid)
 
 
 def write_xdmf(path: str | Path) -> Path:
