@@ -298,7 +298,7 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
     # bodies placed and not yet appended: consecutive draws of the same shape are appended
     # in one call (appending grows every state array: one body at a time cost O(N) each)
     pending: list[tuple[np.ndarray, np.ndarray]] = []
-    pending_shape: list[Any] = [None, None]  # (key, shape)
+    pending_shape: list[Any] = [None, None, None]  # (key, shape, one body of it built)
 
     def flush() -> None:
         if pending:
@@ -320,9 +320,9 @@ def insert(sim: Any, inlet: Inlet) -> np.ndarray:
                            for k, v in sorted(params.items())))
         if key != pending_shape[0]:
             flush()
-            pending_shape[:] = [key, inlet_shape(sim, name, params)]
-        sh = pending_shape[1]
-        batch = sh.build(1, inlet.material.density)
+            sh = inlet_shape(sim, name, params)
+            pending_shape[:] = [key, sh, sh.build(1, inlet.material.density)]
+        batch = pending_shape[2]  # (its bounding radius and mass: the same for each draw)
         rb = float(batch.bounding_radius[0])
         cand = inlet.candidates(rb)
         ok = np.ones(len(cand), bool)
