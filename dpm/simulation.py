@@ -204,6 +204,9 @@ class Simulation:
         self._prepared = False
         self._forces_valid = False
         self._check_cost = 0.0  # seconds of the checks after the last kernel call
+        #: (seconds per step per body, the call length in steps) of the last run's last
+        #: kernel call: the next run starts its calls from it instead of 10 steps
+        self._call_rate: tuple[float, int] | None = None
         #: stop the run when a body moves more than half its radius in a step (contacts
         #: would be missed); False only to measure an integrator's own error past it
         self.speed_guard = True
@@ -876,7 +879,9 @@ class Simulation:
         if self._switches:
             switches.apply_due(self)  # (dt may have changed since they were scheduled)
         done = 0
-        chunk = 10
+        chunk = self._first_chunk()
+        if hasattr(self.backend, "agree_chunk"):
+            chunk = self.backend.agree_chunk(chunk)
         try:
             while done < nsteps:
                 n = min(nsteps - done, chunk)
@@ -909,8 +914,9 @@ class Simulation:
                 # ~60 ms and the checks ~4 ms, which at one or two steps per call had cost
                 # a tenth of the run
                 if elapsed > 0:
-                    aim = max(getattr(self.backend, "call_aim", 0.1),
-                              100.0 * self._check_cost)
+                    aim = self._call_aim()
+                    if ran == n:
+                        self._call_rate = (elapsed / ran / max(len(self.bodies), 1), ran)
                     chunk = int(min(max(chunk * min(aim / elapsed, 4.0), 1), 100000))
                 if hasattr(self.backend, "agree_chunk"):  # (MPI: the same on every rank)
                     chunk = self.backend.agree_chunk(chunk)
@@ -919,6 +925,20 @@ class Simulation:
             if self._writer is not None:
                 self._writer.flush()
 
+
+    def _call_aim(self) -> float:
+        return max(getattr(self.backend, "call_aim", 0.1), 100.0 * self._check_cost)
+
+    def _first_chunk(self) -> int:
+        """Steps of a run's first kernel call: 10, or, after an earlier run, what its last
+        call's seconds per step and body predict for the aim (at most 4x that call's
+        steps), so that a script running many short runs does not ramp its calls up from
+        10 steps every time (across MPI ranks each call ends in a whole-state gather)."""
+        if self._call_rate is None:
+            return 10
+        rate, last = self._call_rate
+        predicted = self._call_aim() / max(rate * max(len(self.bodies), 1), 1e-300)
+        return int(min(max(predicted, 10), 4 * last, 100000))
 
     def _schedule_flows(self) -> None:
         """The step of the next flow event (outlets, inlets): every ``min(every)`` of

@@ -7,7 +7,7 @@ from dpm.kernels import neighbours
 from dpm.kernels.config import N_HISTORY
 
 
-def _build(pos, rad, owner, skin, cap=10000, old=None):
+def _build(pos, rad, owner, skin, cap=10000, old=None, first_ghost=None):
     n = len(pos)
     start = np.zeros(n + 1, np.int64) if old is None else old[0]
     j = np.zeros(cap, np.int64) if old is None else old[1]
@@ -15,7 +15,7 @@ def _build(pos, rad, owner, skin, cap=10000, old=None):
     active = np.zeros(cap, np.uint8)
     count = neighbours.build_neighbour_list(
         pos, rad, owner, skin, start, j, hist, active, np.zeros(n + 1, np.int64),
-        np.zeros(cap, np.int64), np.zeros(6))
+        np.zeros(cap, np.int64), np.zeros(6), n if first_ghost is None else first_ghost)
     return count, start, j, hist
 
 
@@ -90,3 +90,20 @@ def test_transpose_lists_second_elements():
         ks = t_pair[t_start[e]:t_start[e + 1]]
         assert np.all(j[ks] == e) and np.all(np.diff(ks) > 0)
     assert t_start[-1] == count
+
+
+def test_ghost_rows_list_no_pairs_among_themselves():
+    # an MPI rank's ghosts (the rows from first_ghost on): their pairs with owned rows
+    # are listed, in the owned rows; pairs of two ghosts are not
+    rng = np.random.default_rng(5)
+    n, first_ghost = 300, 200
+    pos = rng.uniform(0, 0.03, (n, 3))
+    rad = np.full(n, 1.5e-3)
+    owner = np.arange(n)
+    count, start, j, _ = _build(pos, rad, owner, 2e-4)
+    full = {(i, int(j[k])) for i in range(n) for k in range(start[i], start[i + 1])}
+    count_g, start_g, j_g, _ = _build(pos, rad, owner, 2e-4, first_ghost=first_ghost)
+    got = {(i, int(j_g[k])) for i in range(n) for k in range(start_g[i], start_g[i + 1])}
+    assert got == {(i, k) for i, k in full if min(i, k) < first_ghost}
+    assert any(i < first_ghost <= k for i, k in got)  # (owned-ghost pairs are there)
+    assert count_g == len(got) < count

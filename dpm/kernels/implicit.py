@@ -164,7 +164,7 @@ def candidate_pairs(x, radius, owner, margin, nl_start, nl_j, nl_hist, nl_active
     here so that it is cached with this module); returns how many (above the capacity
     nothing is changed)."""
     return build_neighbour_list(x, radius, owner, margin, nl_start, nl_j, nl_hist, nl_active,
-                                t_start, t_pair, period)
+                                t_start, t_pair, period, x.shape[0])
 
 
 @jit

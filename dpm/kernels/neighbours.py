@@ -145,13 +145,18 @@ def _sorted_copies(e_pos, e_radius, e_owner, order):
 
 @pjit
 def _search(sp, so, skin, lo, width, dims, cell_start, order, counts, out_start, out_end,
-            out_j, fill, period):
+            out_j, fill, period, first_ghost):
     """counts[i] = partners j > i of element i (within r_i + r_j + skin, nearest image).
     With ``fill`` they are also written, sorted, into out_j[out_start[i]:out_end[i]] (as
-    many as fit). Elements are visited in cell order (``sp``, ``so``: cell-ordered copies)."""
+    many as fit). Elements are visited in cell order (``sp``, ``so``: cell-ordered copies).
+    Elements from ``first_ghost`` on (an MPI rank's ghosts) list no partners: a pair of two
+    ghosts is its owners' work, and a ghost's pairs with owned elements sit in those rows."""
     n = sp.shape[0]
     for si in prange(n):
         i = order[si]
+        if i >= first_ghost:
+            counts[i] = 0
+            continue
         xi = sp[si, 0]
         yi = sp[si, 1]
         zi = sp[si, 2]
@@ -254,8 +259,10 @@ SLOT_SLACK = 4
 
 @jit
 def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist, nl_active,
-                         t_start, t_pair, period):
+                         t_start, t_pair, period, first_ghost):
     """Rebuild the half list, merge history and flags, copy back, build the transpose.
+    Elements from ``first_ghost`` on are an MPI rank's ghosts: no pair among them is
+    listed (``e_pos.shape[0]``: none).
 
     One search pass writes each element's partners into a transient slot sized by its count
     in the previous list plus ``SLOT_SLACK`` (lists change little between rebuilds); the
@@ -283,7 +290,7 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
         slot_start[i + 1] = slot_start[i] + (nl_start[i + 1] - nl_start[i]) + SLOT_SLACK
     slots = np.empty(slot_start[n], nl_j.dtype)  # transient: keys only
     _search(sp, so, skin, lo, width, dims, cell_start, order, counts, slot_start,
-            slot_start[1:], slots, n >= 0, period)
+            slot_start[1:], slots, n >= 0, period, first_ghost)
     fits = True
     for i in range(n):
         if counts[i] > slot_start[i + 1] - slot_start[i]:
@@ -305,7 +312,7 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
                 new_j[d0 + k] = slots[s0 + k]
     else:  # some element outgrew its slot: fill the exact rows in a second pass
         _search(sp, so, skin, lo, width, dims, cell_start, order, counts, new_start,
-                new_start[1:], new_j, n >= 0, period)
+                new_start[1:], new_j, n >= 0, period, first_ghost)
     new_hist = np.empty((count, nl_hist.shape[1]))
     new_active = np.empty(count, np.uint8)
     _merge(nl_start, nl_j, nl_hist, nl_active, new_start, new_j, new_hist, new_active)

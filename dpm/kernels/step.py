@@ -188,15 +188,21 @@ def pre_force(dt, ctl, bodies, elems):
     period = ctl.period
     n_owned = ctl.n_owned
     for b in prange(b_pos.shape[0]):
-        if b < n_owned:  # (ghosts: state and predicted velocities come from their owner)
-            if spin_only:
-                pre_force_sphere(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
-                                 b_invmass, b_invinertia, dt, b_vf, b_wf, b_aux)
-            else:
-                pre_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
-                               b_invmass, b_invinertia, dt, b_vf, b_wf, b_aux)
-            if PERIODIC:  # (a constant of the scene)
-                wrap_body(b, period, b_pos, b_estart, e_ref)
+        if b >= n_owned:
+            # a ghost (an MPI rank's copy of another rank's body): its state, predicted
+            # velocities and element positions come from its owner with the halo, and
+            # its owner checks its displacement
+            for e in range(b_estart[b], b_estart[b + 1]):
+                e_d2[e] = 0.0
+            continue
+        if spin_only:
+            pre_force_sphere(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
+                             b_invmass, b_invinertia, dt, b_vf, b_wf, b_aux)
+        else:
+            pre_force_body(b, b_pos, b_vel, b_quat, b_angvel, b_force, b_torque,
+                           b_invmass, b_invinertia, dt, b_vf, b_wf, b_aux)
+        if PERIODIC:  # (a constant of the scene)
+            wrap_body(b, period, b_pos, b_estart, e_ref)
         if update_elements:
             place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos)
         for e in range(b_estart[b], b_estart[b + 1]):
@@ -893,9 +899,12 @@ def rebuild(ctl, bodies, elems, pairs, walls, bnd, diag):
     skin = ctl.skin + ctl.reach
     e_pos, e_radius, e_ref = elems.pos, elems.radius, elems.ref
     nl_j = pairs.key
+    # (an MPI rank's ghosts, the rows from first_ghost on, list no pairs among themselves
+    # and no boundary entries: their owners compute those)
+    first_ghost = bodies.estart[ctl.n_owned]
     need = build_neighbour_list(e_pos, e_radius, elems.owner, skin, pairs.start, nl_j,
                                 pairs.hist, pairs.active, pairs.t_start, pairs.t_pair,
-                                ctl.period)
+                                ctl.period, first_ghost)
     if need > nl_j.shape[0]:
         diag[0] = STATUS_OVERFLOW
         diag[3] = need
@@ -904,7 +913,7 @@ def rebuild(ctl, bodies, elems, pairs, walls, bnd, diag):
     wl_w = walls.key
     need = build_boundary_list(e_pos, e_radius, skin, f_cur, bnd.kind, bnd.par, bnd.grid_int,
                                bnd.grid_flt, bnd.cell_start, bnd.cell_items, bnd.prim_cells,
-                               walls.start, wl_w, walls.hist, walls.active)
+                               walls.start, wl_w, walls.hist, walls.active, first_ghost)
     if need > wl_w.shape[0]:
         diag[0] = STATUS_WALL_OVERFLOW
         diag[3] = need
@@ -980,8 +989,7 @@ def boundary_work(dt, bnd):
 
 @pjit
 def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt, cell_start,
-            cell_items, prim_cells, counts, out_start, out_w, fill):
-    n = e_pos.shape[0]
+            cell_items, prim_cells, counts, out_start, out_w, fill, n):
     nb = frame.shape[0]
     for i in prange(n):
         k = out_start[i] if fill else 0
@@ -1038,9 +1046,10 @@ def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid
 @jit
 def build_boundary_list(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
                         cell_start, cell_items, prim_cells, wl_start, wl_w, wl_hist,
-                        wl_active):
+                        wl_active, first_ghost):
     """Rebuild the element-primitive list (primitives within r + skin), merging history.
     The new list is written into scratch arrays of its exact size, freed on return.
+    Elements from ``first_ghost`` on (an MPI rank's ghosts) get no entries.
 
     Returns the number of entries; above the capacity nothing is changed.
     """
@@ -1048,7 +1057,8 @@ def build_boundary_list(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_
     counts = np.zeros(n, np.int64)
     new_start = np.empty(n + 1, np.int64)
     boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
-                         cell_start, cell_items, prim_cells, counts, new_start, wl_w, n < 0)
+                         cell_start, cell_items, prim_cells, counts, new_start, wl_w, n < 0,
+                         first_ghost)
     new_start[0] = 0
     for i in range(n):
         new_start[i + 1] = new_start[i] + counts[i]
@@ -1057,7 +1067,8 @@ def build_boundary_list(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_
         return count
     new_w = np.empty(count, wl_w.dtype)
     boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
-                         cell_start, cell_items, prim_cells, counts, new_start, new_w, n >= 0)
+                         cell_start, cell_items, prim_cells, counts, new_start, new_w, n >= 0,
+                         first_ghost)
     new_hist = np.empty((count, wl_hist.shape[1]))
     new_active = np.empty(count, np.uint8)
     merge_history(wl_start, wl_w, wl_hist, wl_active, new_start, new_w, new_hist, new_active)

@@ -13,7 +13,7 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   ``Iallgatherv`` into one buffer each, packed and unpacked straight into the host
   arrays by numba kernels, :mod:`dpm.kernels.migrate`).
 - **Sub-domains**: orthogonal recursive bisection (:mod:`dpm.parallel.decomposition`)
-  over the bodies' measured cost (elements plus listed contacts), redone at a call's
+  over the bodies' modelled cost (elements and touching contacts), redone at a call's
   start when the ranks' step times differ by more than ``rebalance`` (LIGGGHTS' ``fix
   balance`` threshold; 1.1 by default), always after the population changed, and at a
   list rebuild inside a call when the ranks' modelled costs (or, ``weight="time"``,
@@ -22,14 +22,18 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   as ghosts every body of another rank with a listed contact partner among its own
   elements (at a call's start), or within 2 r_max + skin (+ the body's own extent) of its
   box (at a list rebuild): a clustered body is ghosted whole. Each rank computes every
-  contact among its rows (owned-ghost pairs on both ranks, Newton's third law not used
-  across ranks), so an owned body's force is complete without sending forces back.
-- **Every step**: the integrator's pre-force part runs for owned bodies and ghosts alike
-  (a ghost holds its owner's state, so it reaches the same bits), the rebuild decision
-  is collective (``Allreduce``), forces and the post-force part run for owned bodies,
-  and then each owner sends its ghosts' new state to the ranks holding them (one
-  message per neighbour, mpi4py buffer calls, ``Isend``/``Irecv``; rows packed and
-  unpacked by numba kernels, :mod:`dpm.kernels.halo`).
+  contact of its owned elements (owned-ghost pairs on both ranks, Newton's third law not
+  used across ranks), so an owned body's force is complete without sending forces back;
+  its lists hold no pair of two ghosts and no boundary entry of a ghost (their owners
+  compute those: the ghosts' forces come with the halo).
+- **Every step**: the integrator's pre-force part runs for owned bodies (only owners
+  integrate), the rebuild decision is collective (``Allreduce``), then each owner sends
+  what the force pass reads of its ghosts (position, quaternion, the velocities the
+  forces see: 13 floats a body) to the ranks holding them, which place the ghosts'
+  elements (LAMMPS' forward communication; one message per neighbour, mpi4py buffer
+  calls, ``Isend``/``Irecv``; rows packed and unpacked by numba kernels,
+  :mod:`dpm.kernels.halo`); forces and the post-force part run for owned bodies. At a
+  rebuild step the migration carries the ghosts' state instead.
 - **At a list rebuild** (the same step on every rank, since ghosts move as their owners):
   bodies whose centre left the box migrate to the rank whose box holds it, with their
   full state (orientation, angular velocity, the integrator's rows) and the history of
@@ -63,7 +67,7 @@ import numpy as np
 from ..backends.base import STATUS_NAN, STATUS_OK, STATUS_OVERLAP, StepResult
 from ..backends.cpu import CpuBackend
 from ..errors import ParameterError
-from ..kernels.halo import STATE_WIDTH, pack_state, unpack_state
+from ..kernels.halo import HALO_WIDTH, pack_halo, unpack_halo
 from . import decomposition as dec
 from . import launched_ranks
 from .local import Entries, LocalScene, Pool, assemble, element_rows, orient_pairs, set_entries
@@ -87,9 +91,9 @@ class MpiBackend(CpuBackend):
         super().__init__(threads=threads, force_pass=force_pass)
         if weight not in ("cost", "time"):
             raise ParameterError(f"MpiBackend(): weight={weight!r}; allowed: cost (elements "
-                                 "and listed contacts), time (that, scaled by each rank's "
+                                 "and touching contacts), time (that, scaled by each rank's "
                                  "measured step time)")
-        #: how a re-cut weighs the bodies: "cost" (elements plus listed contacts) or
+        #: how a re-cut weighs the bodies: "cost" (elements and touching contacts) or
         #: "time" (the cost scaled by each rank's measured step time per unit of cost, as
         #: LIGGGHTS' ``balance ... weight time``: evens the ranks' times on a quiet
         #: machine, follows noise on a shared one)
@@ -110,7 +114,8 @@ class MpiBackend(CpuBackend):
         self._comm = comm
         self._reset_local()
         #: figures of the last call on this rank: steps, seconds stepping (all of it), in
-        #: the halo exchange (waits included), migrating at rebuilds, gathering at the end,
+        #: the step kernels (``work_s``), in the halo exchange (waits included), migrating
+        #: at rebuilds (the list rebuild included), gathering at the end,
         #: scattering at the start; owned bodies and ghosts; halo bytes sent per step
         self.timing: dict[str, float] = {}
         #: the same figures summed over the calls (``reset_totals()`` starts again)
@@ -163,6 +168,15 @@ class MpiBackend(CpuBackend):
     def root(self) -> bool:
         """Whether this rank writes the files (rank 0)."""
         return self.rank == 0
+
+    #: a body's modelled cost per step, in elements, by which the domain is cut: 1 per
+    #: element, ``TOUCHING_WEIGHT`` per touching contact of its elements (a pair counts
+    #: for both its bodies, a boundary contact twice for its one body). ``python benchmarks/mpi_cost_model.py`` (Hertz-Mindlin, one
+    #: thread) measured ~40 ns per element, ~45 ns more per touching pair, and a listed
+    #: pair that does not touch at the noise (|cost| < 1.5 ns): not counted. (Before, each
+    #: listed contact weighed an element and touching ones nothing more, which cut a
+    #: settling bed 1.65 : 1 in the ranks' step times.)
+    TOUCHING_WEIGHT = 0.5
 
     #: a call gathers the whole state at its end (and scatters it at its start when the
     #: host state changed): calls aim at ``CALL_AIM`` seconds of work and at least
@@ -268,6 +282,7 @@ class MpiBackend(CpuBackend):
         t_halo = t_mig = t_recut = 0.0
         recuts = 0
         work, work_steps = 0.0, 0  # this rank's seconds in the step kernels since a check
+        t_work = 0.0  # (and in the whole call)
         clock = time.perf_counter
         t_start = clock()
         inner.diag[4] = 0.0
@@ -277,9 +292,8 @@ class MpiBackend(CpuBackend):
             if rec is None:  # (the records hold the arrays: new ones after a rebuild)
                 rec = inner.records()
                 ctl, bodies, elems, pairs, wl, bnd = rec
-                ctl_all = ctl._replace(n_owned=len(loc.bodies))
             t0 = clock()
-            need = int(module.ranked_pre_force(dt, ctl_all, bodies, elems, bnd, frames, s))
+            need = int(module.ranked_pre_force(dt, ctl, bodies, elems, bnd, frames, s))
             work += clock() - t0
             flags[0] = need < 0
             flags[1] = need > 0
@@ -288,6 +302,7 @@ class MpiBackend(CpuBackend):
                 status = STATUS_NAN
                 break
             if out[1]:
+                t_work += work
                 t0 = clock()
                 if self._recut_in_call(work, work_steps):
                     recuts += 1
@@ -300,14 +315,14 @@ class MpiBackend(CpuBackend):
                 t_mig += time.perf_counter() - t0
                 rec = inner.records()
                 ctl, bodies, elems, pairs, wl, bnd = rec
-                ctl_all = ctl._replace(n_owned=len(loc.bodies))
+            else:  # (after a migration the ghosts came with it)
+                t0 = clock()
+                self._halo()
+                t_halo += clock() - t0
             t0 = clock()
             worst = module.ranked_forces(dt, ctl, bodies, elems, pairs, wl, bnd, inner.diag)
             work += clock() - t0
             work_steps += 1
-            t0 = time.perf_counter()
-            self._halo()
-            t_halo += time.perf_counter() - t0
             ran += 1
             worst_all = max(worst_all, worst)
             flags[2] = worst > loc.max_overlap
@@ -316,6 +331,7 @@ class MpiBackend(CpuBackend):
                 status = STATUS_OVERLAP
                 break
         t_steps = time.perf_counter() - t_start
+        t_work += work
         self._step_time = (t_steps - t_halo) / max(ran, 1)
         t0 = time.perf_counter()
         worst_e = self._gather()
@@ -329,8 +345,9 @@ class MpiBackend(CpuBackend):
         self.timing["rebuilds"] = rebuilds
         self.timing["recuts"] = recuts
         self.timing["recut_s"] = t_recut
-        for k in ("calls", "steps", "rebuilds", "recuts", "steps_s", "halo_s", "migrate_s",
-                  "recut_s", "gather_s", "scatter_s"):
+        self.timing["work_s"] = t_work
+        for k in ("calls", "steps", "rebuilds", "recuts", "steps_s", "work_s", "halo_s",
+                  "migrate_s", "recut_s", "gather_s", "scatter_s"):
             self.totals[k] = self.totals.get(k, 0.0) + self.timing[k]
         best = comm.allreduce((float(inner.diag[4]), self.rank), op=MPI.MAXLOC)
         d = self.diag
@@ -378,15 +395,19 @@ class MpiBackend(CpuBackend):
             self.boxes = dec.bisect(pool_pos, weight, self.ranks, self._layer())
 
     def _cost(self) -> tuple[np.ndarray, Entries]:
-        """Each body's modelled cost (its elements plus its listed contacts) and the
-        host's pair entries."""
+        """Each body's modelled cost (``TOUCHING_WEIGHT``) and the host's pair entries."""
         sim = self.sim
         b, e = sim.bodies, sim.elements
         pairs = Entries.of(sim.contacts)
         nb = len(b)
         weight = np.diff(b.element_start).astype(float)
-        weight += (np.bincount(e.owner[pairs.i], minlength=nb)
-                   + np.bincount(e.owner[pairs.j], minlength=nb))
+        act = (pairs.act != 0).astype(float)
+        weight += self.TOUCHING_WEIGHT * (np.bincount(e.owner[pairs.i], act, minlength=nb)
+                                          + np.bincount(e.owner[pairs.j], act, minlength=nb))
+        wc = sim.wall_contacts
+        rows = np.repeat(np.arange(len(wc.start) - 1), np.diff(wc.start))
+        weight += 2.0 * self.TOUCHING_WEIGHT * np.bincount(
+            e.owner[rows], (wc.active[:wc.count] != 0).astype(float), minlength=nb)
         return weight, pairs
 
     def _cost_imbalance(self) -> float:
@@ -467,42 +488,49 @@ class MpiBackend(CpuBackend):
                     sends[k] = rows.astype(np.int64)
         self._sends = sends
         self._recvs = ranges
-        width = STATE_WIDTH + aux.shape[1]
-        self._sbuf = {k: np.empty((len(r), width)) for k, r in sends.items()}
-        self._rbuf = {k: np.empty((cnt, width)) for k, (_, cnt) in ranges.items()}
+        self._sbuf = {k: np.empty((len(r), HALO_WIDTH)) for k, r in sends.items()}
+        self._rbuf = {k: np.empty((cnt, HALO_WIDTH)) for k, (_, cnt) in ranges.items()}
 
     # ------------------------------------------------------------------ halo
     def _halo(self) -> None:
-        """Owners send their ghosts' state (after the post-force part) to the ranks that
-        hold them; ghosts take it."""
+        """Owners send what the force pass reads of their ghosts (after the pre-force
+        part: position, quaternion, the velocities the forces see) to the ranks that hold
+        them; ghosts take it and place their elements."""
         from mpi4py import MPI
 
         loc, inner = self.local, self.inner
-        b = loc.bodies
+        b, e = loc.bodies, loc.elements
         reqs = []
         for s, buf in self._rbuf.items():
             reqs.append(self.comm.Irecv([buf, MPI.DOUBLE], source=s, tag=11))
         for k, rows in self._sends.items():
             buf = self._sbuf[k]
-            pack_state(rows, b.position, b.velocity, b.orientation, b.angular_velocity,
-                       b.force, b.torque, inner.vf, inner.wf, inner.aux, buf)
+            pack_halo(rows, b.position, b.orientation, inner.vf, inner.wf, buf)
             reqs.append(self.comm.Isend([buf, MPI.DOUBLE], dest=k, tag=11))
         MPI.Request.Waitall(reqs)
+        place = not loc.plan.spheres_only
         for s, buf in self._rbuf.items():
             first, _ = self._recvs[s]
-            unpack_state(first, buf, b.position, b.velocity, b.orientation,
-                         b.angular_velocity, b.force, b.torque, inner.vf, inner.wf,
-                         inner.aux)
+            unpack_halo(first, buf, b.position, b.orientation, inner.vf, inner.wf,
+                        b.element_start, e.offset, e.position, place)
 
     # ------------------------------------------------------------------ re-cut in a call
     def _owned_cost(self) -> np.ndarray:
-        """This rank's owned bodies' modelled cost (elements plus listed contacts, both
-        sides of each pair, as :meth:`_cost` counts them on the host) from its own lists."""
+        """This rank's owned bodies' modelled cost (as :meth:`_cost` counts it on the
+        host) from its own lists."""
         loc = self.local
         b, e, c = loc.bodies, loc.elements, loc.contacts
         n_own, ne = loc.n_owned, len(e.owner)
-        per_elem = np.diff(c.start[:ne + 1]).astype(float)
-        per_elem += np.bincount(c.key[:c.count], minlength=ne)[:ne]
+        act = (c.active[:c.count] != 0).astype(float)
+        row = np.repeat(np.arange(ne), np.diff(c.start[:ne + 1]))
+        per_elem = np.zeros(ne)  # (bincount of nothing is an int array)
+        per_elem += np.bincount(row, act, minlength=ne)[:ne]
+        per_elem += np.bincount(c.key[:c.count], act, minlength=ne)[:ne]
+        w = loc.wall_contacts
+        per_elem += 2.0 * np.bincount(np.repeat(np.arange(ne), np.diff(w.start[:ne + 1])),
+                                      (w.active[:w.count] != 0).astype(float),
+                                      minlength=ne)[:ne]
+        per_elem *= self.TOUCHING_WEIGHT
         per_elem += 1.0  # (the element itself)
         return np.bincount(e.owner, weights=per_elem, minlength=len(b))[:n_own]
 
@@ -591,16 +619,23 @@ class MpiBackend(CpuBackend):
             ship[k] = (rows, sel_p, sel_w)
         recv = self._exchange_migrants(pool, eo, new_owner, near, ship)
         ids = b.id
-        # the pool: this rank's rows, then the rows received that it does not hold
+        # the pool: this rank's rows, then the rows received that it does not hold; a row
+        # it holds (a ghost) takes the received state (its owner's, after the pre-force
+        # part: ghosts are not integrated here, and no halo ran this step)
         top = max([int(ids.max()) if len(ids) else 0]
                   + [int(m["bodies"]["id"].max()) for m in recv if m is not None]) + 1
         have = np.zeros(top, bool)
         have[ids] = True
+        local_row = np.full(top, -1, np.int64)
+        local_row[ids] = np.arange(len(ids))
         extra = []
         for msg in recv:
             if msg is None:
                 continue
             fresh = ~have[msg["bodies"]["id"]]
+            held = np.flatnonzero(~fresh)
+            if len(held):
+                self._take_state(pool, local_row[msg["bodies"]["id"][held]], msg, held)
             if np.any(fresh):
                 rows = np.flatnonzero(fresh)
                 part = {"bodies": {k: v[rows] for k, v in msg["bodies"].items()},
@@ -665,6 +700,21 @@ class MpiBackend(CpuBackend):
             pool.walls = Entries.cat(new_w + [pool.walls], width)
         # rows no rank needs here any more drop out (old ghosts not chosen again)
         self._place(pool, owner, ghost_on, pids)
+
+    @staticmethod
+    def _take_state(pool: Pool, rows: np.ndarray, msg: dict, src: np.ndarray) -> None:
+        """Pool body ``rows`` (with their elements) take the dynamic state of message rows
+        ``src`` (the same bodies)."""
+        for k in ("position", "velocity", "orientation", "angular_velocity", "force",
+                  "torque"):
+            pool.bodies[k][rows] = msg["bodies"][k][src]
+        for name in ("aux", "vf", "wf"):
+            getattr(pool, name)[rows] = msg[name][src]
+        er, _ = element_rows(pool.estart, rows)
+        est_m = np.concatenate([[0], np.cumsum(msg["counts"])])
+        mr, _ = element_rows(est_m, src)
+        for k in ("position", "reference"):
+            pool.elements[k][er] = msg["elements"][k][mr]
 
     def _exchange_migrants(self, pool: Pool, e_owner: np.ndarray, owner: np.ndarray,
                            near: np.ndarray, ship: list) -> list:

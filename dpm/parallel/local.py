@@ -201,14 +201,19 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
         setattr(e, k, np.ascontiguousarray(v[er]))
     new_el = np.full(len(pool.elements["radius"]), -1, np.int64)
     new_el[er] = np.arange(len(er))
+    # a ghost's entries among ghosts and with boundaries are its owner's work: an entry is
+    # kept where an element of it is owned here (as the rank's list rebuilds keep them)
+    first_ghost = int(b.element_start[len(owned)])
     p = pool.pairs
-    keep = (new_el[p.i] >= 0) & (new_el[p.j] >= 0)
+    ni, nj = new_el[p.i], new_el[p.j]
+    keep = (ni >= 0) & (nj >= 0) & (np.minimum(ni, nj) < first_ghost)
     pe = p.where(keep)
     pe = orient_pairs(Entries(new_el[pe.i], new_el[pe.j], pe.hist, pe.act), e.material,
                       scene.plan)
     set_entries(scene.contacts, len(er), pe, unique=True)
     w = pool.walls
-    we = w.where(new_el[w.i] >= 0)
+    wi = new_el[w.i]
+    we = w.where((wi >= 0) & (wi < first_ghost))
     set_entries(scene.wall_contacts, len(er),
                 Entries(new_el[we.i], we.j, we.hist, we.act), unique=True)
     scene.n_owned = int(len(owned))
