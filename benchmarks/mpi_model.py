@@ -11,7 +11,7 @@ Per step, on each of P ranks holding n = N / P particles (box_settle-like packin
                                            ranks)
     halo     = o + m * alpha + B / beta    o: per-step software cost (pack, unpack,
                                            message calls), m messages of B bytes in all
-                                           (25 floats per ghost), alpha latency, beta
+                                           (13 floats per ghost), alpha latency, beta
                                            bandwidth of the interconnect
     reduce   = 2 * alpha_r * log2(P)       the two per-step Allreduces
     migrate  = mu * n / r                  mu: cost per particle of a rebuild's
@@ -39,11 +39,11 @@ import json
 import math
 from pathlib import Path
 
+from dpm.kernels.halo import HALO_WIDTH as FLOATS_PER_GHOST
 from dpm.parallel.backend import MpiBackend
 
 HERE = Path(__file__).resolve().parent
 ALPHA, BETA, ALPHA_R = 2e-6, 10e9, 2e-6
-FLOATS_PER_GHOST = 25
 NEIGHBOURS_3D = 14  # a rank of a recursive bisection in 3D talks to ~14 others
 
 

@@ -70,7 +70,16 @@ from ..errors import ParameterError
 from ..kernels.halo import HALO_WIDTH, pack_halo, unpack_halo
 from . import decomposition as dec
 from . import launched_ranks
-from .local import Entries, LocalScene, Pool, assemble, element_rows, orient_pairs, set_entries
+from .local import (
+    Entries,
+    LocalScene,
+    Pool,
+    assemble,
+    element_rows,
+    orient_pairs,
+    set_entries,
+    take,
+)
 from .messages import Gather, Migration, Scratch, mpi_counts
 
 
@@ -171,11 +180,12 @@ class MpiBackend(CpuBackend):
 
     #: a body's modelled cost per step, in elements, by which the domain is cut: 1 per
     #: element, ``TOUCHING_WEIGHT`` per touching contact of its elements (a pair counts
-    #: for both its bodies, a boundary contact twice for its one body). ``python benchmarks/mpi_cost_model.py`` (Hertz-Mindlin, one
-    #: thread) measured ~40 ns per element, ~45 ns more per touching pair, and a listed
-    #: pair that does not touch at the noise (|cost| < 1.5 ns): not counted. (Before, each
-    #: listed contact weighed an element and touching ones nothing more, which cut a
-    #: settling bed 1.65 : 1 in the ranks' step times.)
+    #: for both its bodies, a boundary contact twice for its one body).
+    #: ``python benchmarks/mpi_cost_model.py`` (Hertz-Mindlin, one thread) measured ~40 ns
+    #: per element, ~45 ns more per touching pair, and a listed pair that does not touch
+    #: at the noise (|cost| < 1.5 ns): not counted. (Before, each listed contact weighed
+    #: an element and touching ones nothing more, which cut a settling bed 1.65 : 1 in
+    #: the ranks' step times.)
     TOUCHING_WEIGHT = 0.5
 
     #: a call gathers the whole state at its end (and scatters it at its start when the
@@ -638,13 +648,13 @@ class MpiBackend(CpuBackend):
                 self._take_state(pool, local_row[msg["bodies"]["id"][held]], msg, held)
             if np.any(fresh):
                 rows = np.flatnonzero(fresh)
-                part = {"bodies": {k: v[rows] for k, v in msg["bodies"].items()},
-                        "elements": None, "aux": msg["aux"][rows], "vf": msg["vf"][rows],
-                        "wf": msg["wf"][rows]}
+                part = {"bodies": {k: take(v, rows) for k, v in msg["bodies"].items()},
+                        "elements": None, "aux": take(msg["aux"], rows),
+                        "vf": take(msg["vf"], rows), "wf": take(msg["wf"], rows)}
                 est_m = np.concatenate([[0], np.cumsum(msg["counts"])])
                 er, counts = element_rows(est_m, rows)
                 part["counts"] = counts
-                part["elements"] = {k: v[er] for k, v in msg["elements"].items()}
+                part["elements"] = {k: take(v, er) for k, v in msg["elements"].items()}
                 extra.append(part)
                 have[part["bodies"]["id"]] = True
         pool.extend(extra)
@@ -707,14 +717,14 @@ class MpiBackend(CpuBackend):
         ``src`` (the same bodies)."""
         for k in ("position", "velocity", "orientation", "angular_velocity", "force",
                   "torque"):
-            pool.bodies[k][rows] = msg["bodies"][k][src]
+            pool.bodies[k][rows] = take(msg["bodies"][k], src)
         for name in ("aux", "vf", "wf"):
-            getattr(pool, name)[rows] = msg[name][src]
+            getattr(pool, name)[rows] = take(msg[name], src)
         er, _ = element_rows(pool.estart, rows)
         est_m = np.concatenate([[0], np.cumsum(msg["counts"])])
         mr, _ = element_rows(est_m, src)
         for k in ("position", "reference"):
-            pool.elements[k][er] = msg["elements"][k][mr]
+            pool.elements[k][er] = take(msg["elements"][k], mr)
 
     def _exchange_migrants(self, pool: Pool, e_owner: np.ndarray, owner: np.ndarray,
                            near: np.ndarray, ship: list) -> list:

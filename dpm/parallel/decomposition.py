@@ -5,8 +5,9 @@ bounding box is cut across its longest side into two parts whose cost is in the 
 the ranks each part gets (1:1 for an even count, 1:2 for three), then each part is cut
 again, until every rank has one box. The cost is summed over slabs of cells across the
 cut axis (cells of the contact search, so that a cut falls between cells) from each body's
-modelled cost: its elements and its touching contacts (``MpiBackend.TOUCHING_WEIGHT``). Outer faces of the outer boxes reach
-to infinity: every point of space lies in exactly one box.
+modelled cost: its elements and its touching contacts (``MpiBackend.TOUCHING_WEIGHT``).
+Outer faces of the outer boxes reach to infinity: every point of space lies in exactly
+one box.
 """
 
 from __future__ import annotations

@@ -25,6 +25,17 @@ import numpy as np
 from ..state import Bodies, Contacts, Elements, WallContacts
 
 
+def take(a: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Rows ``rows`` of ``a`` (``np.take`` along the first axis: 3-5x faster than ``a[rows]``
+    for 2-D arrays, which numpy indexes through its general path)."""
+    return np.take(a, rows, axis=0)
+
+
+def keep(a: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Rows of ``a`` where ``mask`` (``np.compress``: ~4x faster than ``a[mask]`` in 2-D)."""
+    return np.compress(mask, a, axis=0)
+
+
 def element_rows(estart: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(element indices of body ``rows`` in that order, elements per row)."""
     rows = np.asarray(rows, np.int64)
@@ -59,7 +70,8 @@ class Entries:
                    np.zeros(0, np.uint8))
 
     def where(self, mask: np.ndarray) -> Entries:
-        return Entries(self.i[mask], self.j[mask], self.hist[mask], self.act[mask])
+        return Entries(keep(self.i, mask), keep(self.j, mask), keep(self.hist, mask),
+                       keep(self.act, mask))
 
     @staticmethod
     def cat(parts: list[Entries], width: int) -> Entries:
@@ -100,7 +112,7 @@ def set_entries(lst: Any, n_rows: int, e: Entries, unique: bool = False) -> None
         lst.grow(len(i))
     if lst.history.shape[1] != e.hist.shape[1]:
         lst.set_history_width(e.hist.shape[1])
-    lst._set_entries(i, j, e.hist[o], e.act[o], n_rows)
+    lst._set_entries(i, j, take(e.hist, o), take(e.act, o), n_rows)
     if isinstance(lst, Contacts):
         lst.t_start = np.zeros(n_rows + 1, np.int64)
         if lst.rows:
@@ -140,10 +152,11 @@ class Pool:
     def rows_payload(self, rows: np.ndarray) -> dict:
         """The arrays of body ``rows`` (to send to another rank)."""
         er, counts = element_rows(self.estart, rows)
-        return {"bodies": {k: v[rows] for k, v in self.bodies.items()},
+        return {"bodies": {k: take(v, rows) for k, v in self.bodies.items()},
                 "counts": counts,
-                "elements": {k: v[er] for k, v in self.elements.items()},
-                "aux": self.aux[rows], "vf": self.vf[rows], "wf": self.wf[rows]}
+                "elements": {k: take(v, er) for k, v in self.elements.items()},
+                "aux": take(self.aux, rows), "vf": take(self.vf, rows),
+                "wf": take(self.wf, rows)}
 
     def extend(self, payloads: list[dict]) -> None:
         """Append the body rows of ``payloads`` (no contact entries)."""
@@ -191,14 +204,14 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
     rows = np.concatenate([owned, ghosts]).astype(np.int64)
     b = scene.bodies
     for k, v in pool.bodies.items():
-        setattr(b, k, np.ascontiguousarray(v[rows]))
+        setattr(b, k, take(v, rows))
     er, counts = element_rows(pool.estart, rows)
     b.element_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     b.ghosts = int(len(ghosts))
     e = scene.elements
     e.owner = np.repeat(np.arange(len(rows)), counts).astype(np.int64)
     for k, v in pool.elements.items():
-        setattr(e, k, np.ascontiguousarray(v[er]))
+        setattr(e, k, take(v, er))
     new_el = np.full(len(pool.elements["radius"]), -1, np.int64)
     new_el[er] = np.arange(len(er))
     # a ghost's entries among ghosts and with boundaries are its owner's work: an entry is
@@ -206,8 +219,8 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
     first_ghost = int(b.element_start[len(owned)])
     p = pool.pairs
     ni, nj = new_el[p.i], new_el[p.j]
-    keep = (ni >= 0) & (nj >= 0) & (np.minimum(ni, nj) < first_ghost)
-    pe = p.where(keep)
+    mask = (ni >= 0) & (nj >= 0) & (np.minimum(ni, nj) < first_ghost)
+    pe = p.where(mask)
     pe = orient_pairs(Entries(new_el[pe.i], new_el[pe.j], pe.hist, pe.act), e.material,
                       scene.plan)
     set_entries(scene.contacts, len(er), pe, unique=True)
@@ -217,5 +230,4 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
     set_entries(scene.wall_contacts, len(er),
                 Entries(new_el[we.i], we.j, we.hist, we.act), unique=True)
     scene.n_owned = int(len(owned))
-    return (np.ascontiguousarray(pool.aux[rows]), np.ascontiguousarray(pool.vf[rows]),
-            np.ascontiguousarray(pool.wf[rows]))
+    return take(pool.aux, rows), take(pool.vf, rows), take(pool.wf, rows)
