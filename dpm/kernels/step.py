@@ -1110,11 +1110,10 @@ def entry_overlaps(e_pos, e_radius, wl_start, wl_w, kind, par, owner, frame):
 
 
 @jit
-def ranked_pre_force(dt, ctl_all, bodies, elems, bnd, f_table, s):
+def ranked_pre_force(dt, ctl, bodies, elems, bnd, f_table, s):
     """One rank's start of step s (:mod:`dpm.parallel.backend`): the boundary frames of the
-    step, the pre-force part for owned bodies and ghosts alike (``ctl_all.n_owned`` is
-    every row: a ghost holds its owner's state and so reaches the same bits), then the
-    local rebuild answer (1, 0, -1 NaN) that the ranks combine. One compiled call instead
+    step, the pre-force part of the owned bodies (ghosts take their owners' state with the
+    halo that follows), then the local rebuild answer (1, 0, -1 NaN) that the ranks combine. One compiled call instead
     of three: a call's arguments cost numba ~0.3 us per array to unpack."""
     if f_table.shape[0] > 0:
         f_cur = bnd.frame
@@ -1122,8 +1121,8 @@ def ranked_pre_force(dt, ctl_all, bodies, elems, bnd, f_table, s):
         for b in range(f_cur.shape[0]):
             for c in range(f_cur.shape[1]):
                 f_cur[b, c] = f_table[row, b, c]
-    pre_force(dt, ctl_all, bodies, elems)
-    return needs_rebuild(ctl_all, elems, bnd)
+    pre_force(dt, ctl, bodies, elems)
+    return needs_rebuild(ctl, elems, bnd)
 
 
 @jit
