@@ -1113,8 +1113,9 @@ def entry_overlaps(e_pos, e_radius, wl_start, wl_w, kind, par, owner, frame):
 def ranked_pre_force(dt, ctl, bodies, elems, bnd, f_table, s):
     """One rank's start of step s (:mod:`dpm.parallel.backend`): the boundary frames of the
     step, the pre-force part of the owned bodies (ghosts take their owners' state with the
-    halo that follows), then the local rebuild answer (1, 0, -1 NaN) that the ranks combine. One compiled call instead
-    of three: a call's arguments cost numba ~0.3 us per array to unpack."""
+    halo that follows), then the local rebuild answer (1, 0, -1 NaN) that the ranks
+    combine. One compiled call instead of three: a call's arguments cost numba ~0.3 us
+    per array to unpack."""
     if f_table.shape[0] > 0:
         f_cur = bnd.frame
         row = min(s, f_table.shape[0] - 1)
