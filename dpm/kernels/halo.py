@@ -10,7 +10,7 @@ position with their element).
 """
 
 from .config import jit
-from .rigid_rotation import rotate
+from .rigid_rotation import place_elements
 
 #: floats per body row of a halo message
 HALO_WIDTH = 13
@@ -43,9 +43,4 @@ def unpack_halo(first, buf, pos, quat, vf, wf, estart, e_offset, e_pos, place):
         for d in range(4):
             quat[b, d] = buf[k, 3 + d]
         if place:
-            for e in range(estart[b], estart[b + 1]):
-                ox, oy, oz = rotate(quat[b, 0], quat[b, 1], quat[b, 2], quat[b, 3],
-                                    e_offset[e, 0], e_offset[e, 1], e_offset[e, 2])
-                e_pos[e, 0] = pos[b, 0] + ox
-                e_pos[e, 1] = pos[b, 1] + oy
-                e_pos[e, 2] = pos[b, 2] + oz
+            place_elements(b, pos, quat, estart, e_offset, e_pos)

@@ -25,7 +25,7 @@ which keeps these calls cheap inside the per-body loops.
 
 import math
 
-from .config import jit
+from .config import inline_jit, jit
 
 
 @jit
@@ -166,3 +166,14 @@ def rotate_isotropic(q0, q1, q2, q3, wx, wy, wz, dt):
                       a0 * q1 + a1 * q0 + a2 * q3 - a3 * q2,
                       a0 * q2 - a1 * q3 + a2 * q0 + a3 * q1,
                       a0 * q3 + a1 * q2 - a2 * q1 + a3 * q0)
+
+
+@inline_jit
+def place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos):
+    """x_e = X_b + R(q_b) offset_e for the elements of body b."""
+    for e in range(b_estart[b], b_estart[b + 1]):
+        ox, oy, oz = rotate(b_quat[b, 0], b_quat[b, 1], b_quat[b, 2], b_quat[b, 3],
+                            e_offset[e, 0], e_offset[e, 1], e_offset[e, 2])
+        e_pos[e, 0] = b_pos[b, 0] + ox
+        e_pos[e, 1] = b_pos[b, 1] + oy
+        e_pos[e, 2] = b_pos[b, 2] + oz

@@ -45,7 +45,7 @@ from .boundary_search import boundary_motion_since_rebuild, to_local, to_world
 from .mesh_contact import resolve_triangle_contacts
 from .neighbours import _copy_back as copy_back, _merge as merge_history
 from .neighbours import build_neighbour_list, minimum_image
-from .rigid_rotation import rotate
+from .rigid_rotation import place_elements
 
 # --- bindings begin (dpm.plan rewrites this block) ---
 from .config import pair_row
@@ -133,17 +133,6 @@ STATUS_OVERFLOW = 1
 STATUS_NAN = 2
 STATUS_OVERLAP = 3
 STATUS_WALL_OVERFLOW = 4
-
-
-@inline_jit
-def place_elements(b, b_pos, b_quat, b_estart, e_offset, e_pos):
-    """x_e = X_b + R(q_b) offset_e for the elements of body b."""
-    for e in range(b_estart[b], b_estart[b + 1]):
-        ox, oy, oz = rotate(b_quat[b, 0], b_quat[b, 1], b_quat[b, 2], b_quat[b, 3],
-                            e_offset[e, 0], e_offset[e, 1], e_offset[e, 2])
-        e_pos[e, 0] = b_pos[b, 0] + ox
-        e_pos[e, 1] = b_pos[b, 1] + oy
-        e_pos[e, 2] = b_pos[b, 2] + oz
 
 
 @pjit
