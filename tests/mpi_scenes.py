@@ -280,6 +280,7 @@ def main(argv: list[str] | None = None) -> int:
     res = state(sim)
     res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 5))
     res["wall_s"] = np.array(wall)
+    res["loop_used"] = np.array(getattr(sim.backend, "loop_used", ""))
     sim.close()
     if dpm.parallel.rank() == 0:
         np.savez(args.out, **res)

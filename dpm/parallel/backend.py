@@ -33,7 +33,10 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   elements (LAMMPS' forward communication; one message per neighbour, mpi4py buffer
   calls, ``Isend``/``Irecv``; rows packed and unpacked by numba kernels,
   :mod:`dpm.kernels.halo`); forces and the post-force part run for owned bodies. At a
-  rebuild step the migration carries the ghosts' state instead.
+  rebuild step the migration carries the ghosts' state instead. The steps between
+  rebuilds run as one compiled call with the MPI calls in it
+  (:func:`dpm.kernels.step.ranked_run`, :mod:`dpm.kernels.mpi_calls`) where this MPI
+  allows it (:mod:`dpm.parallel.native`; ``loop``), else from Python with mpi4py.
 - **At a list rebuild** (the same step on every rank, since ghosts move as their owners):
   bodies whose centre left the box migrate to the rank whose box holds it, with their
   full state (orientation, angular velocity, the integrator's rows) and the history of
@@ -68,6 +71,7 @@ from ..backends.base import STATUS_NAN, STATUS_OK, STATUS_OVERLAP, StepResult
 from ..backends.cpu import CpuBackend
 from ..errors import ParameterError
 from ..kernels.halo import HALO_WIDTH, pack_halo, unpack_halo
+from ..kernels.mpi_calls import HALO_TAG
 from . import decomposition as dec
 from . import launched_ranks
 from .local import (
@@ -96,8 +100,18 @@ class MpiBackend(CpuBackend):
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
                  rebalance: float = 1.1, boxes: Any = None, weight: str = "cost",
-                 comm: Any = None) -> None:
+                 comm: Any = None, loop: str = "auto") -> None:
         super().__init__(threads=threads, force_pass=force_pass)
+        if loop not in ("auto", "compiled", "python"):
+            raise ParameterError(f"MpiBackend(): loop={loop!r}; allowed: auto (compiled "
+                                 "where this MPI allows it), compiled (an error where it "
+                                 "does not), python")
+        #: how the steps between list rebuilds run: "compiled" (one compiled call with
+        #: the MPI calls in it, :func:`dpm.kernels.step.ranked_run`), "python" (two
+        #: compiled calls per step, messages by mpi4py), "auto" (compiled where
+        #: :func:`dpm.parallel.native.handles` allows it); ``loop_used`` says which ran
+        self.loop = loop
+        self.loop_used = ""
         if weight not in ("cost", "time"):
             raise ParameterError(f"MpiBackend(): weight={weight!r}; allowed: cost (elements "
                                  "and touching contacts), time (that, scaled by each rank's "
@@ -137,10 +151,7 @@ class MpiBackend(CpuBackend):
         self._host_copy: tuple | None = None
         self._step_time = 0.0
         self._old_boxes = self._times = None
-        self._sends: dict = {}
-        self._recvs: dict = {}
-        self._sbuf: dict = {}
-        self._rbuf: dict = {}
+        self._hp: dict = {}
         self._gather_scratch: Scratch | None = None
 
     def __getstate__(self) -> dict[str, Any]:
@@ -148,9 +159,12 @@ class MpiBackend(CpuBackend):
         for k in ("_comm", "local", "inner", "boxes", "_host_copy", "_old_boxes", "_times",
                   "_gather_scratch"):
             state[k] = None
-        for k in ("_sends", "_recvs", "_sbuf", "_rbuf"):
-            state[k] = {}
+        state["_hp"] = {}
         return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # (checkpoints written before the compiled loop: its attributes at defaults)
+        super().__setstate__({"loop": "auto", "loop_used": "", "_hp": {}} | state)
 
     # ------------------------------------------------------------------ communicator
     @property
@@ -287,38 +301,73 @@ class MpiBackend(CpuBackend):
         flags = np.zeros(3, np.int64)
         out = np.zeros(3, np.int64)
         status = STATUS_OK
-        ran = 0
         rebuilds = 0
         worst_all = 0.0
         t_halo = t_mig = t_recut = 0.0
         recuts = 0
-        work, work_steps = 0.0, 0  # this rank's seconds in the step kernels since a check
+        work = 0.0  # this rank's seconds in the step kernels since a re-cut check
         t_work = 0.0  # (and in the whole call)
         clock = time.perf_counter
         t_start = clock()
         inner.diag[4] = 0.0
         inner.diag[5] = -1
         rec = None
-        for s in range(n):
+        h = self._native_handles()
+        if h is not None:
+            acc = np.zeros(3)
+            flags6 = np.zeros(6, np.int64)
+            statuses = np.zeros(0, np.uint8)
+        s = 0
+        since = 0  # (the step of the last re-cut check)
+        while s < n:
             if rec is None:  # (the records hold the arrays: new ones after a rebuild)
                 rec = inner.records()
                 ctl, bodies, elems, pairs, wl, bnd = rec
-            t0 = clock()
-            need = int(module.ranked_pre_force(dt, ctl, bodies, elems, bnd, frames, s))
-            work += clock() - t0
-            flags[0] = need < 0
-            flags[1] = need > 0
-            comm.Allreduce(flags, out, op=MPI.MAX)
-            if out[0]:
-                status = STATUS_NAN
-                break
-            if out[1]:
+            if h is not None:  # compiled steps until a rebuild, the end, or a failure
+                hp = self._hp
+                k = len(hp["requests"])
+                if len(statuses) < k * h[4]:
+                    statuses = np.zeros(k * int(h[4]), np.uint8)
+                acc[:] = 0.0
+                s, why = module.ranked_run(
+                    s, n, dt, ctl, bodies, elems, pairs, wl, bnd, frames, inner.diag,
+                    float(loc.max_overlap), hp["first"], not loc.plan.spheres_only,
+                    hp["send_rows"], hp["send_rank"], hp["send_off"], hp["sbuf"],
+                    hp["recv_rank"], hp["recv_off"], hp["rbuf"], hp["requests"], statuses,
+                    h, flags6, acc)
+                work += acc[0]
+                t_halo += acc[1]
+                worst_all = max(worst_all, acc[2])
+                if why == module.RUN_DONE:
+                    break
+                if why == module.RUN_NAN:
+                    status = STATUS_NAN
+                    break
+                if why == module.RUN_OVERLAP:
+                    status = STATUS_OVERLAP
+                    break
+                if why == module.RUN_MPI_ERROR:
+                    raise RuntimeError(f"MpiBackend: an MPI call failed in the compiled "
+                                       f"step loop at step {s} on rank {self.rank}")
+                rebuild = True  # (RUN_REBUILD: step s's pre-force part done, agreed)
+            else:
+                t0 = clock()
+                need = int(module.ranked_pre_force(dt, ctl, bodies, elems, bnd, frames, s))
+                work += clock() - t0
+                flags[0] = need < 0
+                flags[1] = need > 0
+                comm.Allreduce(flags, out, op=MPI.MAX)
+                if out[0]:
+                    status = STATUS_NAN
+                    break
+                rebuild = bool(out[1])
+            if rebuild:
                 t_work += work
                 t0 = clock()
-                if self._recut_in_call(work, work_steps):
+                if self._recut_in_call(work, s - since):
                     recuts += 1
                 t_recut += clock() - t0
-                work, work_steps = 0.0, 0
+                work, since = 0.0, s
                 t0 = clock()
                 self._migrate()
                 inner.rebuild()  # (history of the carried entries merged by pair)
@@ -333,14 +382,14 @@ class MpiBackend(CpuBackend):
             t0 = clock()
             worst = module.ranked_forces(dt, ctl, bodies, elems, pairs, wl, bnd, inner.diag)
             work += clock() - t0
-            work_steps += 1
-            ran += 1
+            s += 1
             worst_all = max(worst_all, worst)
             flags[2] = worst > loc.max_overlap
             comm.Allreduce(flags[2:], out[2:], op=MPI.MAX)
             if out[2]:
                 status = STATUS_OVERLAP
                 break
+        ran = s
         t_steps = time.perf_counter() - t_start
         t_work += work
         self._step_time = (t_steps - t_halo) / max(ran, 1)
@@ -350,8 +399,7 @@ class MpiBackend(CpuBackend):
                        "migrate_s": t_mig, "gather_s": time.perf_counter() - t0,
                        "scatter_s": t_scatter, "owned": loc.n_owned,
                        "ghosts": int(loc.bodies.ghosts),
-                       "halo_bytes_per_step": float(sum(b.nbytes
-                                                        for b in self._sbuf.values()))}
+                       "halo_bytes_per_step": float(self._hp["sbuf"].nbytes)}
         self.timing["calls"] = 1
         self.timing["rebuilds"] = rebuilds
         self.timing["recuts"] = recuts
@@ -366,6 +414,22 @@ class MpiBackend(CpuBackend):
         d[5] = comm.bcast(worst_e, root=best[1])
         d[1] = ran
         return StepResult(ran, status, rebuilds, float(best[0]), int(d[5]))
+
+    def _native_handles(self) -> np.ndarray | None:
+        """The MPI handles for :func:`dpm.kernels.step.ranked_run`, or None: the Python
+        loop (``loop``; :func:`dpm.parallel.native.handles`)."""
+        if self.loop == "python":
+            self.loop_used = "python"
+            return None
+        from .native import handles
+
+        h, why = handles(self.comm)
+        if h is None and self.loop == "compiled":
+            raise ParameterError(f"MpiBackend(loop='compiled'): this MPI cannot be called "
+                                 f"from compiled code here: {why}; allowed: loop='auto' "
+                                 "or 'python'")
+        self.loop_used = "python" if h is None else "compiled"
+        return h
 
     # ------------------------------------------------------------------ scatter
     def _layer(self) -> float:
@@ -497,10 +561,29 @@ class MpiBackend(CpuBackend):
                 rows = np.flatnonzero(ghost_on[k, mine])
                 if len(rows):
                     sends[k] = rows.astype(np.int64)
-        self._sends = sends
-        self._recvs = ranges
-        self._sbuf = {k: np.empty((len(r), HALO_WIDTH)) for k, r in sends.items()}
-        self._rbuf = {k: np.empty((cnt, HALO_WIDTH)) for k, (_, cnt) in ranges.items()}
+        self._halo_plan(sends, ranges, len(mine))
+
+    def _halo_plan(self, sends: dict, ranges: dict, n_own: int) -> None:
+        """The halo's messages as flat arrays (what :func:`dpm.kernels.step.ranked_run`
+        takes): owned rows to send, rank by rank (``send_off`` delimits them), one buffer
+        row each; ghost rows ``n_own ..`` received rank by rank (``recv_off``) into one
+        buffer whose rows are the ghost rows in order."""
+        z = np.zeros(0, np.int64)
+        s_rank = np.array(sorted(sends), np.int64)
+        s_rows = np.concatenate([sends[k] for k in s_rank]) if len(s_rank) else z
+        s_off = np.concatenate([[0], np.cumsum([len(sends[k]) for k in s_rank])])
+        r_rank = np.array(sorted(ranges), np.int64)
+        firsts = [ranges[k][0] for k in r_rank]
+        if firsts != sorted(firsts) or (firsts and firsts[0] != n_own):
+            raise RuntimeError("MpiBackend: ghost groups are not in rank order")
+        r_off = np.concatenate([[0], np.cumsum([ranges[k][1] for k in r_rank])])
+        self._hp = {"send_rows": s_rows.astype(np.int64), "send_rank": s_rank,
+                    "send_off": s_off.astype(np.int64),
+                    "sbuf": np.empty((len(s_rows), HALO_WIDTH)),
+                    "recv_rank": r_rank, "recv_off": r_off.astype(np.int64),
+                    "rbuf": np.empty((int(r_off[-1]), HALO_WIDTH)),
+                    "requests": np.zeros(len(s_rank) + len(r_rank), np.intp),
+                    "first": n_own}
 
     # ------------------------------------------------------------------ halo
     def _halo(self) -> None:
@@ -511,19 +594,21 @@ class MpiBackend(CpuBackend):
 
         loc, inner = self.local, self.inner
         b, e = loc.bodies, loc.elements
+        hp = self._hp
+        sbuf, rbuf = hp["sbuf"], hp["rbuf"]
+        pack_halo(hp["send_rows"], b.position, b.orientation, inner.vf, inner.wf, sbuf)
         reqs = []
-        for s, buf in self._rbuf.items():
-            reqs.append(self.comm.Irecv([buf, MPI.DOUBLE], source=s, tag=11))
-        for k, rows in self._sends.items():
-            buf = self._sbuf[k]
-            pack_halo(rows, b.position, b.orientation, inner.vf, inner.wf, buf)
-            reqs.append(self.comm.Isend([buf, MPI.DOUBLE], dest=k, tag=11))
+        off = hp["recv_off"]
+        for m, s in enumerate(hp["recv_rank"]):
+            reqs.append(self.comm.Irecv([rbuf[off[m]:off[m + 1]], MPI.DOUBLE],
+                                        source=int(s), tag=HALO_TAG))
+        off = hp["send_off"]
+        for k, d in enumerate(hp["send_rank"]):
+            reqs.append(self.comm.Isend([sbuf[off[k]:off[k + 1]], MPI.DOUBLE],
+                                        dest=int(d), tag=HALO_TAG))
         MPI.Request.Waitall(reqs)
-        place = not loc.plan.spheres_only
-        for s, buf in self._rbuf.items():
-            first, _ = self._recvs[s]
-            unpack_halo(first, buf, b.position, b.orientation, inner.vf, inner.wf,
-                        b.element_start, e.offset, e.position, place)
+        unpack_halo(hp["first"], rbuf, b.position, b.orientation, inner.vf, inner.wf,
+                    b.element_start, e.offset, e.position, not loc.plan.spheres_only)
 
     # ------------------------------------------------------------------ re-cut in a call
     def _owned_cost(self) -> np.ndarray:
