@@ -65,7 +65,8 @@ def main() -> None:
                     print(key, f"{res['particle_steps_per_s']:.4g}", flush=True)
     med = {k: statistics.median(v) for k, v in rates.items()}
     split = {k: [{f: round(row.get(f, 0.0), 4) for f in
-                  ("steps_s", "work_s", "halo_s", "migrate_s", "gather_s", "scatter_s",
+                  ("steps_s", "work_s", "halo_s", "wait_s", "migrate_s", "gather_s",
+                   "scatter_s",
                    "calls", "rebuilds", "recuts", "owned", "ghosts")}
                  for row in last[k]["ranks"]] for k in last}
     out = {"a": str(args.a), "b": str(args.b), "lattice": args.lattice,

@@ -147,10 +147,13 @@ def shares(res: dict) -> dict:
     if not rows or "steps_s" not in rows[0]:
         return {}
     mean = {k: sum(r.get(k, 0.0) for r in rows) / len(rows)
-            for k in ("steps_s", "halo_s", "migrate_s", "gather_s", "scatter_s")}
+            for k in ("steps_s", "halo_s", "wait_s", "migrate_s", "gather_s", "scatter_s")}
     return {"halo_share": mean["halo_s"] / wall, "migrate_share": mean["migrate_s"] / wall,
             "gather_scatter_share": (mean["gather_s"] + mean["scatter_s"]) / wall,
-            "compute_share": (mean["steps_s"] - mean["halo_s"] - mean["migrate_s"]) / wall,
+            # (the vote after the forces: a rank waiting for the slowest one's forces)
+            "wait_share": mean["wait_s"] / wall,
+            "compute_share": (mean["steps_s"] - mean["halo_s"] - mean["migrate_s"]
+                              - mean["wait_s"]) / wall,
             "owned_imbalance": max(r["owned"] for r in rows)
             / (sum(r["owned"] for r in rows) / len(rows)),
             "ghost_fraction": sum(r["ghosts"] for r in rows)
@@ -182,7 +185,8 @@ def plot(result: dict, path: Path) -> None:
     axs[0].set_ylabel("particle-steps per second")
     axs[0].set_title("strong scaling on this machine, same sitting")
     axs[0].legend(fontsize=8)
-    parts = ["compute_share", "halo_share", "migrate_share", "gather_scatter_share"]
+    parts = ["compute_share", "wait_share", "halo_share", "migrate_share",
+             "gather_scatter_share"]
     bottom = [0.0] * len(sizes)
     for part in parts:
         vals = [s.get("dpm_2_ranks_shares", {}).get(part, 0.0) for s in sizes]

@@ -1144,8 +1144,9 @@ def ranked_run(s0, n, dt, ctl, bodies, elems, pairs, walls, bnd, f_table, diag,
     overlap limit combined. Returns (the step it stopped at, why: ``RUN_DONE`` at n,
     ``RUN_REBUILD`` with that step's pre-force part done and a rebuild agreed,
     ``RUN_NAN`` before it, ``RUN_OVERLAP`` after it: its forces done, ``RUN_MPI_ERROR``).
-    ``acc`` gathers seconds in the step kernels [0] and in the halo [1], and the largest
-    overlap [2]."""
+    ``acc`` gathers seconds in the step kernels [0], in the rebuild vote and the halo [1]
+    (waits for slower ranks included), the largest overlap [2], and seconds in the
+    overlap vote [3] (a wait for the slowest rank's forces)."""
     for s in range(s0, n):
         t0 = mpi_wtime()
         need = ranked_pre_force(dt, ctl, bodies, elems, bnd, f_table, s)
@@ -1168,11 +1169,13 @@ def ranked_run(s0, n, dt, ctl, bodies, elems, pairs, walls, bnd, f_table, diag,
         t2 = mpi_wtime()
         acc[1] += t2 - t1
         worst = ranked_forces(dt, ctl, bodies, elems, pairs, walls, bnd, diag)
-        acc[0] += mpi_wtime() - t2
+        t3 = mpi_wtime()
+        acc[0] += t3 - t2
         acc[2] = max(acc[2], worst)
         flags[2] = 1 if worst > max_overlap else 0
         if allreduce_max(flags[2:3], flags[5:6], h) != 0:
             return s + 1, RUN_MPI_ERROR
+        acc[3] += mpi_wtime() - t3
         if flags[5] != 0:
             return s + 1, RUN_OVERLAP
     return n, RUN_DONE

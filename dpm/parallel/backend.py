@@ -137,7 +137,9 @@ class MpiBackend(CpuBackend):
         self._comm = comm
         self._reset_local()
         #: figures of the last call on this rank: steps, seconds stepping (all of it), in
-        #: the step kernels (``work_s``), in the halo exchange (waits included), migrating
+        #: the step kernels (``work_s``), in the rebuild vote and the halo exchange (waits
+        #: included, ``halo_s``), in the overlap vote after the forces (``wait_s``: this
+        #: rank waiting for the slowest one's forces), migrating
         #: at rebuilds (the list rebuild included), gathering at the end,
         #: scattering at the start; owned bodies and ghosts; halo bytes sent per step
         self.timing: dict[str, float] = {}
@@ -303,7 +305,7 @@ class MpiBackend(CpuBackend):
         status = STATUS_OK
         rebuilds = 0
         worst_all = 0.0
-        t_halo = t_mig = t_recut = 0.0
+        t_halo = t_mig = t_recut = t_wait = 0.0
         recuts = 0
         work = 0.0  # this rank's seconds in the step kernels since a re-cut check
         t_work = 0.0  # (and in the whole call)
@@ -314,7 +316,7 @@ class MpiBackend(CpuBackend):
         rec = None
         h = self._native_handles()
         if h is not None:
-            acc = np.zeros(3)
+            acc = np.zeros(4)
             flags6 = np.zeros(6, np.int64)
             statuses = np.zeros(0, np.uint8)
         s = 0
@@ -335,9 +337,10 @@ class MpiBackend(CpuBackend):
                     hp["send_rows"], hp["send_rank"], hp["send_off"], hp["sbuf"],
                     hp["recv_rank"], hp["recv_off"], hp["rbuf"], hp["requests"], statuses,
                     h, flags6, acc)
-                work += acc[0]
-                t_halo += acc[1]
-                worst_all = max(worst_all, acc[2])
+                work += float(acc[0])
+                t_halo += float(acc[1])
+                worst_all = max(worst_all, float(acc[2]))
+                t_wait += float(acc[3])
                 if why == module.RUN_DONE:
                     break
                 if why == module.RUN_NAN:
@@ -356,7 +359,9 @@ class MpiBackend(CpuBackend):
                 work += clock() - t0
                 flags[0] = need < 0
                 flags[1] = need > 0
+                t0 = clock()
                 comm.Allreduce(flags, out, op=MPI.MAX)
+                t_halo += clock() - t0
                 if out[0]:
                     status = STATUS_NAN
                     break
@@ -385,7 +390,9 @@ class MpiBackend(CpuBackend):
             s += 1
             worst_all = max(worst_all, worst)
             flags[2] = worst > loc.max_overlap
+            t0 = clock()
             comm.Allreduce(flags[2:], out[2:], op=MPI.MAX)
+            t_wait += clock() - t0
             if out[2]:
                 status = STATUS_OVERLAP
                 break
@@ -405,8 +412,9 @@ class MpiBackend(CpuBackend):
         self.timing["recuts"] = recuts
         self.timing["recut_s"] = t_recut
         self.timing["work_s"] = t_work
+        self.timing["wait_s"] = t_wait
         for k in ("calls", "steps", "rebuilds", "recuts", "steps_s", "work_s", "halo_s",
-                  "migrate_s", "recut_s", "gather_s", "scatter_s"):
+                  "wait_s", "migrate_s", "recut_s", "gather_s", "scatter_s"):
             self.totals[k] = self.totals.get(k, 0.0) + self.timing[k]
         best = comm.allreduce((float(inner.diag[4]), self.rank), op=MPI.MAXLOC)
         d = self.diag
@@ -473,7 +481,7 @@ class MpiBackend(CpuBackend):
         """Each body's modelled cost (``TOUCHING_WEIGHT``) and the host's pair entries."""
         sim = self.sim
         b, e = sim.bodies, sim.elements
-        pairs = Entries.of(sim.contacts)
+        pairs = Entries.of(sim.contacts, copy=False)  # (no history read)
         nb = len(b)
         weight = np.diff(b.element_start).astype(float)
         act = (pairs.act != 0).astype(float)

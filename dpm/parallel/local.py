@@ -57,12 +57,20 @@ class Entries:
     act: np.ndarray
 
     @classmethod
-    def of(cls, lst: Any, active_only: bool = False) -> Entries:
+    def of(cls, lst: Any, active_only: bool = False, copy: bool = True) -> Entries:
+        """The entries of a CSR list (``active_only``: the touching ones, taken without
+        copying the others' history first: a rank lists ~2.5 pairs per touching one;
+        ``copy=False``: every entry, history and flags as views of the list)."""
         n = lst.count
+        if active_only:
+            idx = np.flatnonzero(lst.active[:n])
+            i = np.searchsorted(lst.start, idx, side="right") - 1
+            return cls(i.astype(np.int64), np.take(lst.key, idx).astype(np.int64),
+                       take(lst.history, idx), np.take(lst.active, idx))
         i = np.repeat(np.arange(len(lst.start) - 1), np.diff(lst.start))
-        out = cls(i, lst.key[:n].astype(np.int64), lst.history[:n].copy(),
-                  lst.active[:n].copy())
-        return out.where(out.act != 0) if active_only else out
+        hist, act = lst.history[:n], lst.active[:n]
+        return cls(i, lst.key[:n].astype(np.int64), hist.copy() if copy else hist,
+                   act.copy() if copy else act)
 
     @classmethod
     def empty(cls, width: int) -> Entries:
