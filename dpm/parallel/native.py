@@ -19,39 +19,35 @@ import os
 
 import numpy as np
 
-_LOADED: dict[str, bool] = {}
+#: (whether the MPI symbols resolve, why not), once per process
+_READY: list[tuple[bool, str]] = []
 
 
 def _library_paths() -> list[str]:
     """Paths of the MPI shared libraries mapped into this process (Linux)."""
     try:
         with open("/proc/self/maps") as f:
-            maps = f.read().splitlines()
+            paths = [line.split()[-1] for line in f if line.strip()]
     except OSError:
         return []
-    out = []
-    for line in maps:
-        path = line.split()[-1] if line.split() else ""
-        name = os.path.basename(path)
-        if name.startswith(("libmpi.so", "libmpi_")) and ".so" in name and path not in out:
-            out.append(path)
-    return out
+    names = ("libmpi.so", "libmpi_")
+    return list(dict.fromkeys(p for p in paths if os.path.basename(p).startswith(names)
+                              and ".so" in p))
 
 
 def _symbols_ready() -> tuple[bool, str]:
     """Load the MPI library into LLVM's symbol search (once) and check the symbols."""
-    import llvmlite.binding as llvm
+    if not _READY:
+        import llvmlite.binding as llvm
 
-    from ..kernels.mpi_calls import SYMBOLS
+        from ..kernels.mpi_calls import SYMBOLS
 
-    if "ok" in _LOADED:
-        return _LOADED["ok"], "" if _LOADED["ok"] else "symbols not found"
-    if not all(llvm.address_of_symbol(s) for s in SYMBOLS):
-        for path in _library_paths():
-            llvm.load_library_permanently(path)
-    missing = [s for s in SYMBOLS if not llvm.address_of_symbol(s)]
-    _LOADED["ok"] = not missing
-    return not missing, f"symbols {missing} not found in {_library_paths()}"
+        if not all(llvm.address_of_symbol(s) for s in SYMBOLS):
+            for path in _library_paths():
+                llvm.load_library_permanently(path)
+        missing = [s for s in SYMBOLS if not llvm.address_of_symbol(s)]
+        _READY.append((not missing, f"symbols {missing} not found in {_library_paths()}"))
+    return _READY[0]
 
 
 def handles(comm) -> tuple[np.ndarray | None, str]:
