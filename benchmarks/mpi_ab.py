@@ -37,8 +37,11 @@ def run(tree: Path, lat: list[int], steps: int, ranks: int, out: Path) -> dict:
     cmd = [_mpiexec(), "--allow-run-as-root", "--oversubscribe", "-n", str(ranks),
            "--bind-to", "none", sys.executable, str(script), "--worker", *map(str, lat),
            str(steps), str(out), "1"]
-    subprocess.run(cmd, check=True, env=env, capture_output=True, text=True,
-                   stdin=subprocess.DEVNULL, cwd=tree.resolve())
+    done = subprocess.run(cmd, env=env, capture_output=True, text=True,
+                          stdin=subprocess.DEVNULL, cwd=tree.resolve())
+    if done.returncode:
+        raise SystemExit(f"mpi_ab: {' '.join(cmd)} failed ({done.returncode}):\n"
+                         f"{done.stdout[-3000:]}\n{done.stderr[-3000:]}")
     return json.loads(out.read_text())
 
 

@@ -86,6 +86,9 @@ from .local import (
 )
 from .messages import Gather, Migration, Scratch, mpi_counts
 
+#: step functions compiled in turn in this process (:meth:`MpiBackend._compile_in_turn`)
+_COMPILED_IN_TURN: dict[int, Any] = {}
+
 
 class MpiBackend(CpuBackend):
     """Domain decomposition over MPI ranks: one sub-domain per rank, ghosts, migration with
@@ -285,9 +288,12 @@ class MpiBackend(CpuBackend):
         times = comm.allgather(self._step_time)
         same = comm.allreduce(int(self._host_unchanged()), op=MPI.MIN)
         t_scatter = time.perf_counter()
-        if not same or dec.imbalance(times) > self.rebalance or (
-                self.fixed_boxes is None and self.boxes is not None
-                and self._cost_imbalance() > self.rebalance):
+        # (by the measure the cut evens: with weight "cost" the step times differ where
+        # the model is off, and a cut by cost alone would not change)
+        recut = self.fixed_boxes is None and self.boxes is not None and (
+            dec.imbalance(times) if self.weight == "time"
+            else self._cost_imbalance()) > self.rebalance
+        if not same or recut:
             if same:  # a re-cut: each rank's bodies weighted by its measured step time
                 self._times = np.asarray(times, float)
                 self._old_boxes = self.boxes
@@ -331,12 +337,13 @@ class MpiBackend(CpuBackend):
                 if len(statuses) < k * h[4]:
                     statuses = np.zeros(k * int(h[4]), np.uint8)
                 acc[:] = 0.0
-                s, why = module.ranked_run(
-                    s, n, dt, ctl, bodies, elems, pairs, wl, bnd, frames, inner.diag,
-                    float(loc.max_overlap), hp["first"], not loc.plan.spheres_only,
-                    hp["send_rows"], hp["send_rank"], hp["send_off"], hp["sbuf"],
-                    hp["recv_rank"], hp["recv_off"], hp["rbuf"], hp["requests"], statuses,
-                    h, flags6, acc)
+                args = (s, n, dt, ctl, bodies, elems, pairs, wl, bnd, frames, inner.diag,
+                        float(loc.max_overlap), hp["first"], not loc.plan.spheres_only,
+                        hp["send_rows"], hp["send_rank"], hp["send_off"], hp["sbuf"],
+                        hp["recv_rank"], hp["recv_off"], hp["rbuf"], hp["requests"],
+                        statuses, h, flags6, acc)
+                self._compile_in_turn(module.ranked_run, args)
+                s, why = module.ranked_run(*args)
                 work += float(acc[0])
                 t_halo += float(acc[1])
                 worst_all = max(worst_all, float(acc[2]))
@@ -354,6 +361,8 @@ class MpiBackend(CpuBackend):
                                        f"step loop at step {s} on rank {self.rank}")
                 rebuild = True  # (RUN_REBUILD: step s's pre-force part done, agreed)
             else:
+                self._compile_in_turn(module.ranked_pre_force,
+                                      (dt, ctl, bodies, elems, bnd, frames, s))
                 t0 = clock()
                 need = int(module.ranked_pre_force(dt, ctl, bodies, elems, bnd, frames, s))
                 work += clock() - t0
@@ -375,6 +384,7 @@ class MpiBackend(CpuBackend):
                 work, since = 0.0, s
                 t0 = clock()
                 self._migrate()
+                self._compile_in_turn(module.rebuild, (*inner.records(), inner.diag))
                 inner.rebuild()  # (history of the carried entries merged by pair)
                 rebuilds += 1
                 t_mig += time.perf_counter() - t0
@@ -384,6 +394,8 @@ class MpiBackend(CpuBackend):
                 t0 = clock()
                 self._halo()
                 t_halo += clock() - t0
+            self._compile_in_turn(module.ranked_forces,
+                                  (dt, ctl, bodies, elems, pairs, wl, bnd, inner.diag))
             t0 = clock()
             worst = module.ranked_forces(dt, ctl, bodies, elems, pairs, wl, bnd, inner.diag)
             work += clock() - t0
@@ -399,7 +411,7 @@ class MpiBackend(CpuBackend):
         ran = s
         t_steps = time.perf_counter() - t_start
         t_work += work
-        self._step_time = (t_steps - t_halo) / max(ran, 1)
+        self._step_time = t_work / max(ran, 1)  # (in the step kernels: no waits)
         t0 = time.perf_counter()
         worst_e = self._gather()
         self.timing = {"steps": ran, "steps_s": t_steps, "halo_s": t_halo,
@@ -422,6 +434,31 @@ class MpiBackend(CpuBackend):
         d[5] = comm.bcast(worst_e, root=best[1])
         d[1] = ran
         return StepResult(ran, status, rebuilds, float(best[0]), int(d[5]))
+
+    def _compile_in_turn(self, fn: Any, args: tuple) -> None:
+        """Compile step function ``fn`` for the types of ``args`` on rank 0 first, into
+        numba's cache, then on the other ranks, which load it from there: a scene kind's
+        first run on R ranks compiles each function once, not R times at once (R
+        compilers sharing the cores, every one writing the cache). Collective: called
+        where every rank calls ``fn`` next; at most once per function and process."""
+        key = id(fn)
+        if key in _COMPILED_IN_TURN:
+            return
+        _COMPILED_IN_TURN[key] = fn  # (held: the id stays this function's)
+        import numba
+
+        sig = tuple(numba.typeof(a) for a in args)
+        failed = None
+        if self.rank == 0:
+            try:
+                fn.compile(sig)
+            except Exception as exc:  # (the others fail alike; none waits forever)
+                failed = exc
+        self.comm.Barrier()
+        if failed is not None:
+            raise failed
+        if self.rank != 0:
+            fn.compile(sig)
 
     def _native_handles(self) -> np.ndarray | None:
         """The MPI handles for :func:`dpm.kernels.step.ranked_run`, or None: the Python
