@@ -294,7 +294,7 @@ class MpiBackend(CpuBackend):
             dec.imbalance(times) if self.weight == "time"
             else self._cost_imbalance()) > self.rebalance
         if not same or recut:
-            if same:  # a re-cut: each rank's bodies weighted by its measured step time
+            if same:  # a re-cut (with weight "time": by each rank's measured step time)
                 self._times = np.asarray(times, float)
                 self._old_boxes = self.boxes
                 self.boxes = None
@@ -331,6 +331,14 @@ class MpiBackend(CpuBackend):
             if rec is None:  # (the records hold the arrays: new ones after a rebuild)
                 rec = inner.records()
                 ctl, bodies, elems, pairs, wl, bnd = rec
+                # (the step functions this call may run, their first compile in turn; a
+                # rebuild's records are of the same types)
+                self._compile_in_turn(module.rebuild, (*rec, inner.diag))
+                if h is None:
+                    self._compile_in_turn(module.ranked_pre_force,
+                                          (dt, ctl, bodies, elems, bnd, frames, s))
+                    self._compile_in_turn(module.ranked_forces,
+                                          (dt, ctl, bodies, elems, pairs, wl, bnd, inner.diag))
             if h is not None:  # compiled steps until a rebuild, the end, or a failure
                 hp = self._hp
                 k = len(hp["requests"])
@@ -361,8 +369,6 @@ class MpiBackend(CpuBackend):
                                        f"step loop at step {s} on rank {self.rank}")
                 rebuild = True  # (RUN_REBUILD: step s's pre-force part done, agreed)
             else:
-                self._compile_in_turn(module.ranked_pre_force,
-                                      (dt, ctl, bodies, elems, bnd, frames, s))
                 t0 = clock()
                 need = int(module.ranked_pre_force(dt, ctl, bodies, elems, bnd, frames, s))
                 work += clock() - t0
@@ -384,7 +390,6 @@ class MpiBackend(CpuBackend):
                 work, since = 0.0, s
                 t0 = clock()
                 self._migrate()
-                self._compile_in_turn(module.rebuild, (*inner.records(), inner.diag))
                 inner.rebuild()  # (history of the carried entries merged by pair)
                 rebuilds += 1
                 t_mig += time.perf_counter() - t0
@@ -394,8 +399,6 @@ class MpiBackend(CpuBackend):
                 t0 = clock()
                 self._halo()
                 t_halo += clock() - t0
-            self._compile_in_turn(module.ranked_forces,
-                                  (dt, ctl, bodies, elems, pairs, wl, bnd, inner.diag))
             t0 = clock()
             worst = module.ranked_forces(dt, ctl, bodies, elems, pairs, wl, bnd, inner.diag)
             work += clock() - t0
