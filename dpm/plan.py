@@ -311,14 +311,42 @@ def _splice(template: str, lines: list[str]) -> str:
 
 def render(laws: list[tuple[str, str]], integrator_module: str,
            kinds: list[int] | None = None, periodic: bool = False,
-           fused: bool = False) -> str:
+           fused: bool = False, one_thread: bool = False) -> str:
     """Source of the step module for these laws (composed :class:`LawSpec` s or monolithic
     (module, function)), integrator, boundary kinds, periodic axes and force pass
-    (``fused``: every body a single sphere)."""
+    (``fused``: every body a single sphere); ``one_thread``: its one-thread form."""
     lines, body = _laws(laws)
     lines += integrator_lines(integrator_module)
     lines += _closest_lines(kinds or [], periodic, fused)
-    return _splice("step.py", lines + body)
+    src = _splice("step.py", lines + body)
+    return one_thread_form(src) if one_thread else src
+
+
+#: appended to the one-thread form (run at its import, before any function compiles):
+#: numba notes that ``parallel=True`` found no
+#: parallel loop to transform, which is the point of this form
+_ONE_THREAD_TAIL = """\
+import warnings as _warnings
+
+from numba.core.errors import NumbaPerformanceWarning as _NumbaPerformanceWarning
+
+_warnings.filterwarnings("ignore", category=_NumbaPerformanceWarning,
+                         message="(?s).*'parallel=True' was specified but no transformation")
+"""
+
+
+def one_thread_form(src: str) -> str:
+    """The one-thread form of a generated step module's source: every ``prange`` loop a
+    plain ``range`` loop, the functions still compiled with ``parallel=True``.
+
+    A ``prange`` loop launches a parallel region even on one thread (~0.9 us each, three
+    per step: most of a tiny scene's step, benchmarks/NOTES.md rows 40 and 46), while
+    the plain loop inside a ``parallel=True`` function is compiled as fast as the body of
+    a parallel loop (as plain ``@jit`` functions the same loops ran 4-5x slower: the
+    docstring of :func:`dpm.kernels.step.fused_pass`). Each loop's iterations
+    run in the same order as one chunk of the parallel form, so both forms give the same
+    bits (tests/test_backend_contract.py runs 1 and 2 threads)."""
+    return src.replace("prange(", "range(") + "\n\n" + _ONE_THREAD_TAIL
 
 
 def integrator_lines(integrator_module: str) -> list[str]:
@@ -356,12 +384,12 @@ def implicit_module(laws) -> ModuleType:
 
 def step_module(laws: list[tuple[str, str]], integrator_module: str,
                 kinds: list[int] | None = None, periodic: bool = False,
-                fused: bool = False) -> ModuleType:
+                fused: bool = False, one_thread: bool = False) -> ModuleType:
     """Import (generating if needed) the step module for these laws, integrator, boundary
-    kinds, periodic axes and force pass."""
+    kinds, periodic axes and force pass, in its one-thread form if ``one_thread``."""
     if not laws:
         laws = [("dpm.kernels.law_linear", "linear_spring_dashpot")]
-    src = render(laws, integrator_module, kinds, periodic, fused)
+    src = render(laws, integrator_module, kinds, periodic, fused, one_thread)
     from .boundaries.primitives import primitive_kind
 
     # the modules the bindings import: laws, integrator, plugin geometry functions
@@ -459,7 +487,8 @@ class ScenePlan:
         #: (laws, history width) bool: history floats negated when a pair swaps
         self.history_flips = history_flips(laws, history_width)
 
-    def module(self, fused: bool) -> ModuleType:
-        """The generated step module of this scene for one force form."""
+    def module(self, fused: bool, one_thread: bool = False) -> ModuleType:
+        """The generated step module of this scene for one force form (and in its
+        one-thread form if ``one_thread``: :func:`one_thread_form`)."""
         return step_module(self.laws, self.integrator_module, self.kinds, self.periodic,
-                           fused=fused)
+                           fused=fused, one_thread=one_thread)

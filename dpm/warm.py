@@ -84,8 +84,11 @@ def background_allowed() -> bool:
     return os.environ.get("DPM_BACKGROUND_COMPILE", "1") not in ("0", "", "no", "false")
 
 
-def choose(plan: Any, fused: bool, kernels: str) -> tuple[ModuleType, bool]:
-    """(step module, whether it is the universal one) for a run of ``plan``."""
+def choose(plan: Any, fused: bool, kernels: str, one_thread: bool = False
+           ) -> tuple[ModuleType, bool]:
+    """(step module, whether it is the universal one) for a run of ``plan`` (on one
+    thread: the scene's own module in its one-thread form, :func:`dpm.plan.one_thread_form`;
+    the universal module has one form)."""
     from . import universal_step
 
     covered = universal_step.covers(plan.laws) and _builtin_kinds(plan.kinds)
@@ -95,7 +98,7 @@ def choose(plan: Any, fused: bool, kernels: str) -> tuple[ModuleType, bool]:
                                  "law or boundary kind; allowed: 'scene' or 'auto'")
         uni = universal_step.universal_module(plan.integrator_module)
         return _load_module(uni, "the universal"), True
-    own = plan.module(fused)
+    own = plan.module(fused, one_thread)
     if kernels == "scene" or is_ready(own) or not covered:
         return _load_module(own, "this scene's"), False
     uni = universal_step.universal_module(plan.integrator_module)
@@ -150,13 +153,16 @@ def signatures(module: ModuleType) -> dict[str, list]:
     return out
 
 
-def compile_in_background(plan: Any, fused: bool, sigs: dict[str, list]) -> Path | None:
-    """Start a detached process that compiles the scene's own step module for the
-    signatures ``sigs`` (what the universal module was called with) and marks it ready;
-    None when the plan cannot be handed over (a law defined in a script)."""
+def compile_in_background(plan: Any, fused: bool, sigs: dict[str, list],
+                          one_thread: bool = False) -> Path | None:
+    """Start a detached process that compiles the scene's own step module (in its
+    one-thread form if ``one_thread``) for the signatures ``sigs`` (what the universal
+    module was called with) and marks it ready; None when the plan cannot be handed over
+    (a law defined in a script)."""
     from . import plan as _plan
 
-    job = (plan.laws, plan.integrator_module, plan.kinds, plan.periodic, fused, sigs)
+    job = (plan.laws, plan.integrator_module, plan.kinds, plan.periodic, fused, sigs,
+           one_thread)
     try:
         data = pickle.dumps(job)
     except Exception:  # noqa: BLE001  (classes of a script's __main__: nothing to hand over)
@@ -166,7 +172,7 @@ def compile_in_background(plan: Any, fused: bool, sigs: dict[str, list]) -> Path
     # one compile per module at a time: a script that makes many scenes of one kind (a
     # parameter sweep, a benchmark) would otherwise start one compile of the same module
     # for each scene while the first is still running
-    busy = Path(plan.module(fused).__file__).with_suffix(".compiling")
+    busy = Path(plan.module(fused, one_thread).__file__).with_suffix(".compiling")
     if not _claim(busy):
         return None
     path = d / f"compile-{os.getpid()}-{time.time_ns()}.job"
@@ -229,8 +235,10 @@ def compile_job(path: Path) -> ModuleType:
     """Compile the scene module a job file names (see :func:`compile_in_background`)."""
     from . import plan as _plan
 
-    laws, integrator, kinds, periodic, fused, sigs = pickle.loads(Path(path).read_bytes())
-    module = _plan.step_module(laws, integrator, kinds, periodic, fused)
+    laws, integrator, kinds, periodic, fused, sigs, *form = pickle.loads(
+        Path(path).read_bytes())
+    module = _plan.step_module(laws, integrator, kinds, periodic, fused,
+                               one_thread=bool(form and form[0]))
     if not is_ready(module):
         for name, sig_list in sigs.items():
             for sig in sig_list:

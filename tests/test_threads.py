@@ -117,3 +117,24 @@ def test_thread_count_follows_a_scene_an_inlet_grows(monkeypatch):
         sim._registry.manager.unregister(probe)
     assert seen[0] == (4, 1)
     assert seen[-1] == (5004, 2)
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 threads")
+def test_a_run_on_one_thread_takes_the_one_thread_form(monkeypatch):
+    """On one thread the step module's ``prange`` loops are plain loops (no parallel
+    launch per loop and step); two threads take the parallel form; DPM_ONE_THREAD_FORM=0
+    keeps the parallel form on one thread. (That both forms give the same bits is the
+    one-and-two-threads tests above and in tests/test_backend_contract.py.)"""
+    from pathlib import Path
+
+    def module_of(threads):
+        sim = _scene(threads)
+        sim.run(steps=10, progress=False)
+        return sim.backend.module
+
+    one, two = module_of(1), module_of(2)
+    assert one is not two
+    assert "prange(" not in Path(one.__file__).read_text()
+    assert "prange(" in Path(two.__file__).read_text()
+    monkeypatch.setenv("DPM_ONE_THREAD_FORM", "0")
+    assert module_of(1) is two

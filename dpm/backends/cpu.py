@@ -44,6 +44,12 @@ SORT_EVERY = 20
 FORCE_PASSES = ("auto", "fused", "two_pass")
 
 
+def one_thread_form_on() -> bool:
+    """Whether runs on one thread take the step module's one-thread form (default yes;
+    ``$DPM_ONE_THREAD_FORM=0``: the parallel form on any thread count, for an A/B)."""
+    return os.environ.get("DPM_ONE_THREAD_FORM", "1") not in ("0", "", "no", "false")
+
+
 def default_threads() -> int:
     """``$DPM_THREADS`` (an integer or ``all``), else 1."""
     value = os.environ.get("DPM_THREADS", "1")
@@ -92,6 +98,9 @@ class CpuBackend:
     #: whether this backend can run the universal step module (the MPI and CUDA backends
     #: call functions of the scene's own)
     universal_ok = True
+    #: whether a run on one thread may take the step module's one-thread form
+    #: (:func:`dpm.plan.one_thread_form`; ``$DPM_ONE_THREAD_FORM=0`` turns it off)
+    one_thread_ok = True
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
                  sort_every: int | None = None, kernels: str | None = None) -> None:
@@ -110,7 +119,7 @@ class CpuBackend:
         #: the step module is the universal one (its pair table: ``_universal_params``)
         self.universal = False
         self._universal_params: np.ndarray | None = None
-        self._form: bool | None = None
+        self._form: tuple[bool, bool] | None = None
         self._compiled = False
         #: renumber the bodies in cell order after this many list rebuilds (0: never)
         self.sort_every = sort_every
@@ -182,17 +191,22 @@ class CpuBackend:
     def sync_form(self) -> None:
         """Load the step module of the force pass the scene needs: the fused pass when
         every body is a single sphere, else the two-pass sum (``FUSED``, a constant of the
-        generated module, so that a scene compiles one form only)."""
+        generated module, so that a scene compiles one form only); on one thread its
+        one-thread form (no parallel-loop launches: :func:`dpm.plan.one_thread_form`).
+        Called at a run's start, once the run's thread count is set."""
         plan = self.sim.plan
-        want = (plan.spheres_only if self.force_pass == "auto"
-                else self.force_pass == "fused" and plan.spheres_only)
+        fused = (plan.spheres_only if self.force_pass == "auto"
+                 else self.force_pass == "fused" and plan.spheres_only)
+        want = (fused, self.one_thread_ok and one_thread_form_on()
+                and numba.get_num_threads() == 1)
         if self.module is None or self._form != want:
             self._form = want
             self._compiled = False
             if self.universal_ok:
-                self.module, self.universal = warm.choose(plan, want, self.kernel_choice)
+                self.module, self.universal = warm.choose(plan, want[0], self.kernel_choice,
+                                                          one_thread=want[1])
             else:
-                self.module, self.universal = plan.module(want), False
+                self.module, self.universal = plan.module(*want), False
             self._universal_params = None
             if self.universal:
                 from ..universal_step import universal_tables
@@ -208,8 +222,8 @@ class CpuBackend:
         self._compiled = True
         warm.mark_ready(self.module)
         if self.universal and self.kernel_choice == "auto" and warm.background_allowed():
-            warm.compile_in_background(self.sim.plan, self._form,
-                                       warm.signatures(self.module))
+            warm.compile_in_background(self.sim.plan, self._form[0],
+                                       warm.signatures(self.module), self._form[1])
 
     def fused_chunks(self) -> int:
         """The number of chunks (one per thread) if the step sums forces as it computes

@@ -133,6 +133,7 @@ class CudaBackend(CpuBackend):
     """
 
     universal_ok = False  # (its kernels call functions of the scene's own module)
+    one_thread_ok = False  # (one module for its host parts and device functions)
 
     name = "cuda"
     #: seconds of steps the run loop aims at per call (the host state travels once per
