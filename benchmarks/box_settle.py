@@ -7,6 +7,7 @@ figures, their ratio and the mean heights) and box_settle.png.
 
     python benchmarks/box_settle.py              # full scene
     python benchmarks/box_settle.py --quick      # 1,000 spheres, 2,000 steps
+    python benchmarks/box_settle.py --lattice 10 10 10 --steps 20000 --tag box_settle_1e3
 """
 
 from __future__ import annotations
@@ -119,6 +120,8 @@ def main():
     p.add_argument("--lattice", type=int, nargs=3, default=None)
     p.add_argument("--steps", type=int, default=None)
     p.add_argument("--no-liggghts", action="store_true")
+    p.add_argument("--tag", default=None,
+                   help="results/<tag>.json and .png (default box_settle, box_settle_quick)")
     a = p.parse_args()
     lat = a.lattice or ((10, 10, 10) if a.quick else (20, 20, 25))
     steps = a.steps or (2000 if a.quick else 20000)
@@ -133,7 +136,7 @@ def main():
               "mean_z_rel_diff": (d["mean_z_m"] / lg["mean_z_m"] - 1)
               if lg and lg["mean_z_m"] else None}
     RESULTS.mkdir(exist_ok=True)
-    tag = "box_settle" if not a.quick else "box_settle_quick"
+    tag = a.tag or ("box_settle" if not a.quick else "box_settle_quick")
     (RESULTS / f"{tag}.json").write_text(json.dumps(result, indent=2))
     plot(result, RESULTS / f"{tag}.png")
     print(json.dumps(result, indent=2))

@@ -1,20 +1,19 @@
-"""The step module's two forms on small and mesh scenes: as compiled (``prange`` loops,
-one parallel launch each even on one thread) against a one-thread form (the same
-generated module with its ``prange`` loops made plain loops), swapped in turn on the same
-scenes in one process (benchmarks/NOTES.md row 46).
+"""The step module's two forms on small and mesh scenes: the parallel form (``prange``
+loops, one parallel launch each even on one thread) against the one-thread form that a run
+on one thread takes (:func:`dpm.plan.one_thread_form`), chosen in turn on the same scenes
+in one process by ``$DPM_ONE_THREAD_FORM`` (benchmarks/NOTES.md rows 46 and 50).
 
 The scenes are ``boundaries.mesh_scaling``'s floors (with its far-away sentinel
 boundaries, ``sphere_orientation=False``): 1 sphere on 2 triangles, 81 spheres on 200,
 2,000 spheres on one 210 mm floor of 200 and of 2,048 triangles. Prints ns per
-sphere-step of each form and their ratio, three rounds. The one-thread form is written
-beside the cached module (``*_serial.py``) and compiled here (minutes on a cold cache).
+sphere-step of each form and their ratio, three rounds (``results/step_forms.json``).
 
     python benchmarks/step_forms.py
 """
 
 from __future__ import annotations
 
-import importlib.util
+import json
 import math
 import os
 import sys
@@ -57,43 +56,33 @@ def scene(m: int, side: float | None, n_spheres: int):
     return sim
 
 
-def one_thread_form(module):
-    """The generated module with its ``prange(`` loops made ``range(`` (still compiled
-    with parallel=True, which numba then reports it could not use)."""
-    path = Path(module.__file__).with_name(Path(module.__file__).stem + "_serial.py")
-    path.write_text(Path(module.__file__).read_text().replace("prange(", "range("))
-    spec = importlib.util.spec_from_file_location(module.__name__ + "_serial", path)
-    out = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = out
-    spec.loader.exec_module(out)
-    return out
-
-
 def main() -> None:
-    import warnings
-
-    warnings.simplefilter("ignore")  # (numba: "parallel=True ... no transformation")
     sims = [scene(*c) for c in CASES]
-    par = sims[0].backend.module
     t0 = time.perf_counter()
-    ser = one_thread_form(par)
-    for s in sims:  # compile (or load) the one-thread form
-        s.backend.module = ser
-        s.run(steps=5, progress=False)
-    print(f"one-thread form ready in {time.perf_counter() - t0:.0f} s", flush=True)
-    for _ in range(3):
+    for s in sims:  # compile (or load) both forms
+        for flag in ("0", "1"):
+            os.environ["DPM_ONE_THREAD_FORM"] = flag
+            s.run(steps=5, progress=False)
+    print(f"both forms ready in {time.perf_counter() - t0:.0f} s", flush=True)
+    rows = []
+    for r in range(3):
         for case, s in zip(CASES, sims, strict=True):
             ns = []
-            for mod in (par, ser):
-                s.backend.module = mod
+            for flag in ("0", "1"):  # (the module is chosen at each run's start)
+                os.environ["DPM_ONE_THREAD_FORM"] = flag
                 n = max(1000, int(1e6 / len(s.bodies)))
                 s.run(steps=200, progress=False)
                 t = time.perf_counter()
                 s.run(steps=n, progress=False)
                 ns.append((time.perf_counter() - t) / n / len(s.bodies) * 1e9)
+            rows.append({"round": r, "triangles": 2 * case[0] ** 2, "spheres": case[2],
+                         "parallel_form_ns": ns[0], "one_thread_form_ns": ns[1],
+                         "ratio": ns[1] / ns[0]})
             print(f"floor m={case[0]} side={case[1]} spheres={case[2]}: ns per sphere-step "
                   f"parallel form {ns[0]:.1f}, one-thread form {ns[1]:.1f}, "
                   f"ratio {ns[1] / ns[0]:.3f}", flush=True)
+    out = Path(__file__).resolve().parent / "results" / "step_forms.json"
+    out.write_text(json.dumps(rows, indent=1))
 
 
 if __name__ == "__main__":

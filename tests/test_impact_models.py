@@ -468,7 +468,8 @@ def test_scene_binds_only_the_laws_it_uses(monkeypatch):
     class Stop(Exception):
         pass
 
-    def record(laws, integrator_module, kinds=None, periodic=False, fused=False):
+    def record(laws, integrator_module, kinds=None, periodic=False, fused=False,
+               one_thread=False):
         seen.append(list(laws))
         raise Stop
 
