@@ -85,12 +85,12 @@ def summarise(name: str, d: dict) -> list[dict]:
                      "ratio_1": d.get("speed_ratio_dpm_over_liggghts"), "ratio_2": None,
                      "physics": json.dumps(d.get("physics", {}))[:80], "file": src})
     elif name == "drum":
-        sr = d.get("speed_ratios", {})
+        sr = d.get("speed") or d.get("speed_ratios", {})  # (drum_peer.py writes "speed")
         phys = json.dumps(d.get("physics", {}))[:80]
         for variant in ("mesh", "tube"):
-            rows.append({"scene": "rotating drum", "variant": f"{variant} (rotating phase)",
-                         "ratio_1": _find(sr, f"{variant}_1_thread", "spin"),
-                         "ratio_2": _find(sr, f"{variant}_2_threads", "spin"),
+            rows.append({"scene": "rotating drum", "variant": f"{variant} (steady window)",
+                         "ratio_1": _find(sr, f"{variant}_1_thread_over_liggghts", "window"),
+                         "ratio_2": _find(sr, f"{variant}_2_threads_over_liggghts_window"),
                          "physics": phys, "file": src})
     elif name == "mesh_floors":
         for m in d.get("mesh", []):

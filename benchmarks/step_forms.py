@@ -7,8 +7,12 @@ The scenes are ``boundaries.mesh_scaling``'s floors (with its far-away sentinel
 boundaries, ``sphere_orientation=False``): 1 sphere on 2 triangles, 81 spheres on 200,
 2,000 spheres on one 210 mm floor of 200 and of 2,048 triangles. Prints ns per
 sphere-step of each form and their ratio, three rounds (``results/step_forms.json``).
+``--box-settle``: the box_settle scene instead (``results/step_forms_box_settle.json``);
+``--meshgran``: the meshGran port's loop (``results/step_forms_meshgran.json``).
 
     python benchmarks/step_forms.py
+    python benchmarks/step_forms.py --box-settle 20 20 25 --steps 5000   # 10,000 spheres
+    python benchmarks/step_forms.py --meshgran
 """
 
 from __future__ import annotations
@@ -56,7 +60,74 @@ def scene(m: int, side: float | None, n_spheres: int):
     return sim
 
 
+def box_settle_ab(lattice: list[int], steps: int, rounds: int) -> None:
+    """box_settle (``box_settle.run_dpm``, one thread, a new scene each run) on the two
+    forms in turn, ``rounds`` pairs after one untimed pair; particle-steps per second."""
+    import statistics
+
+    import box_settle
+
+    rates: dict[str, list[float]] = {"parallel": [], "one_thread": []}
+    for r in range(rounds + 1):
+        for flag, key in (("0", "parallel"), ("1", "one_thread")):
+            os.environ["DPM_ONE_THREAD_FORM"] = flag
+            d = box_settle.run_dpm(lattice, steps, threads=1)
+            if r:
+                rates[key].append(d["particle_steps_per_s"])
+                print(f"box_settle {'x'.join(map(str, lattice))} {key} form: "
+                      f"{d['particle_steps_per_s']:.4g} particle-steps/s", flush=True)
+    med = {k: statistics.median(v) for k, v in rates.items()}
+    out = {"lattice": lattice, "steps": steps, "particle_steps_per_s": rates,
+           "median": med, "one_thread_over_parallel": med["one_thread"] / med["parallel"]}
+    print(f"medians: parallel {med['parallel']:.4g}, one-thread {med['one_thread']:.4g}: "
+          f"{out['one_thread_over_parallel']:.3f}")
+    path = Path(__file__).resolve().parent / "results" / "step_forms_box_settle.json"
+    path.write_text(json.dumps(out, indent=1))
+
+
+def meshgran_ab(rounds: int) -> None:
+    """The meshGran port's dpm loop (``meshgran.run_dpm``: 500 spheres streamed in over
+    0.5 s, run to 2.5 s, one thread) on the two forms in turn, ``rounds`` pairs after one
+    untimed pair; particle-steps per second over the whole loop."""
+    import statistics
+
+    import meshgran
+
+    rates: dict[str, list[float]] = {"parallel": [], "one_thread": []}
+    for r in range(rounds + 1):
+        for flag, key in (("0", "parallel"), ("1", "one_thread")):
+            os.environ["DPM_ONE_THREAD_FORM"] = flag
+            d = meshgran.run_dpm(0.5, 2.5)
+            if r:
+                rates[key].append(d["particle_steps_per_s"])
+                print(f"meshGran {key} form: {d['particle_steps_per_s']:.4g} "
+                      f"particle-steps/s, loop {d['loop_s']:.2f} s", flush=True)
+    med = {k: statistics.median(v) for k, v in rates.items()}
+    out = {"particle_steps_per_s": rates, "median": med,
+           "one_thread_over_parallel": med["one_thread"] / med["parallel"]}
+    print(f"medians: parallel {med['parallel']:.4g}, one-thread {med['one_thread']:.4g}: "
+          f"{out['one_thread_over_parallel']:.3f}")
+    path = Path(__file__).resolve().parent / "results" / "step_forms_meshgran.json"
+    path.write_text(json.dumps(out, indent=1))
+
+
 def main() -> None:
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--box-settle", type=int, nargs=3, metavar=("NX", "NY", "NZ"),
+                    help="instead: box_settle of this lattice on the two forms in turn")
+    ap.add_argument("--meshgran", action="store_true",
+                    help="instead: the meshGran port's loop on the two forms in turn")
+    ap.add_argument("--steps", type=int, default=5000)
+    ap.add_argument("--rounds", type=int, default=3)
+    args = ap.parse_args()
+    if args.box_settle:
+        box_settle_ab(args.box_settle, args.steps, args.rounds)
+        return
+    if args.meshgran:
+        meshgran_ab(args.rounds)
+        return
     sims = [scene(*c) for c in CASES]
     t0 = time.perf_counter()
     for s in sims:  # compile (or load) both forms

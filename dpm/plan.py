@@ -323,8 +323,8 @@ def render(laws: list[tuple[str, str]], integrator_module: str,
 
 
 #: appended to the one-thread form (run at its import, before any function compiles):
-#: numba notes that ``parallel=True`` found no
-#: parallel loop to transform, which is the point of this form
+#: numba notes that ``parallel=True`` found no parallel loop to transform, which is the
+#: point of this form
 _ONE_THREAD_TAIL = """\
 import warnings as _warnings
 

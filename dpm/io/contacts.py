@@ -102,7 +102,14 @@ def _evaluated_rows(sim: Any) -> np.ndarray:
     bnd = rec.BoundaryArrays(w.kind, w.par, w.owner, w.material, w.ids, w.frame,
                              w.frame_ref, w.extent, w.load.copy(), w.grid_int, w.grid_flt,
                              w.cell_start, w.cell_items, w.prim_cells)
-    plan.module(False).contact_pass(0.0, ctl, bodies, elems, pairs, walls, bnd)
+    # (the two-pass module in the form the run's thread count takes: a clustered scene's
+    # own, not a second module to compile)
+    import numba
+
+    from ..backends.cpu import one_thread_form_on
+
+    one = numba.get_num_threads() == 1 and one_thread_form_on()
+    plan.module(False, one).contact_pass(0.0, ctl, bodies, elems, pairs, walls, bnd)
     return rows
 
 
