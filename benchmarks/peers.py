@@ -7,7 +7,7 @@ benchmark script, which runs dpm and LIGGGHTS side by side and writes its JSON:
 =================  =============================  ==========================================
 scene              script                         physics compared
 =================  =============================  ==========================================
-box_settle         benchmarks/box_settle.py       mean settled height
+box_settle         benchmarks/box_settle.py       mean settled height (1e4 and 1e3 spheres)
 clusters           benchmarks/clusters_settle.py  settled height, packing (fix multisphere)
 meshGran (STL)     benchmarks/meshgran.py         inserted and contained counts
 rotating drum      benchmarks/drum_peer.py        dynamic angle of repose (move/mesh)
@@ -35,9 +35,12 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
 
-#: name -> (script, JSON stem)
+#: name -> (script, JSON stem[, the script's arguments])
 SCENES = {
     "box_settle": ("box_settle.py", "box_settle"),
+    "box_settle_1e3": ("box_settle.py", "box_settle_1e3",
+                       ["--lattice", "10", "10", "10", "--steps", "20000", "--tag",
+                        "box_settle_1e3"]),
     "clusters": ("clusters_settle.py", "clusters_settle"),
     "meshgran": ("meshgran.py", "meshgran"),
     "drum": ("drum_peer.py", "drum_peer"),
@@ -66,7 +69,7 @@ def summarise(name: str, d: dict) -> list[dict]:
     """Rows (scene, variant, speed ratio one core, two threads, physics) of one JSON."""
     rows: list[dict] = []
     src = d.get("_file", "")
-    if name == "box_settle":
+    if name in ("box_settle", "box_settle_1e3"):
         rows.append({"scene": "box_settle", "variant": "x".join(map(str, d.get("lattice", []))),
                      "ratio_1": d.get("ratio"), "ratio_2": d.get("ratio_2_threads"),
                      "physics": f"mean height {100 * d.get('mean_z_rel_diff', 0):+.2f} %",
@@ -138,7 +141,10 @@ def main(argv: list[str] | None = None) -> int:
             if not script.exists():
                 print(f"{name}: {script.name} missing, skipped", file=sys.stderr)
                 continue
-            cmd = [sys.executable, str(script)] + (["--quick"] if args.quick else [])
+            extra = list(SCENES[name][2]) if len(SCENES[name]) > 2 else []
+            if args.quick and extra:
+                continue  # (a size of its own: no quick form)
+            cmd = [sys.executable, str(script)] + (["--quick"] if args.quick else extra)
             print(f"== {name}: {' '.join(cmd[1:])}", flush=True)
             t0 = time.perf_counter()
             subprocess.run(cmd, check=True)
