@@ -8,11 +8,13 @@ boundaries, ``sphere_orientation=False``): 1 sphere on 2 triangles, 81 spheres o
 2,000 spheres on one 210 mm floor of 200 and of 2,048 triangles. Prints ns per
 sphere-step of each form and their ratio, three rounds (``results/step_forms.json``).
 ``--box-settle``: the box_settle scene instead (``results/step_forms_box_settle.json``);
-``--meshgran``: the meshGran port's loop (``results/step_forms_meshgran.json``).
+``--meshgran``: the meshGran port's loop (``results/step_forms_meshgran.json``);
+``--clusters``: the settled bed of 2,000 clusters (``results/step_forms_clusters.json``).
 
     python benchmarks/step_forms.py
     python benchmarks/step_forms.py --box-settle 20 20 25 --steps 5000   # 10,000 spheres
     python benchmarks/step_forms.py --meshgran
+    python benchmarks/step_forms.py --clusters
 """
 
 from __future__ import annotations
@@ -111,6 +113,39 @@ def meshgran_ab(rounds: int) -> None:
     path.write_text(json.dumps(out, indent=1))
 
 
+def clusters_ab(rounds: int, steps: int) -> None:
+    """``clusters_settle.py``'s 2,000 four-sphere clusters from its own lattice start,
+    settled on two threads (its settle steps), then on one thread the two forms in turn on
+    that bed, ``rounds`` pairs of ``steps`` steps after one untimed pair; us per step."""
+    import statistics
+
+    import clusters_settle as cs
+
+    geo = cs.geometry(2000, side=0.035)
+    sim = cs.scene(cs.own_start(2000, geo), geo)
+    sim.threads = 2
+    os.environ["DPM_ONE_THREAD_FORM"] = "1"
+    sim.run(steps=geo["settle_steps"], progress=False)
+    sim.threads = 1
+    us: dict[str, list[float]] = {"parallel": [], "one_thread": []}
+    for r in range(rounds + 1):
+        for flag, key in (("0", "parallel"), ("1", "one_thread")):
+            os.environ["DPM_ONE_THREAD_FORM"] = flag
+            t = time.perf_counter()
+            sim.run(steps=steps, progress=False)
+            if r:
+                us[key].append((time.perf_counter() - t) / steps * 1e6)
+                print(f"settled clusters {key} form: {us[key][-1]:.1f} us per step",
+                      flush=True)
+    med = {k: statistics.median(v) for k, v in us.items()}
+    out = {"bodies": 2000, "steps_each": steps, "us_per_step": us, "median": med,
+           "one_thread_over_parallel_time": med["one_thread"] / med["parallel"]}
+    print(f"medians: parallel {med['parallel']:.1f}, one-thread {med['one_thread']:.1f} us "
+          f"per step: time ratio {out['one_thread_over_parallel_time']:.3f}")
+    path = Path(__file__).resolve().parent / "results" / "step_forms_clusters.json"
+    path.write_text(json.dumps(out, indent=1))
+
+
 def main() -> None:
     import argparse
 
@@ -119,6 +154,8 @@ def main() -> None:
                     help="instead: box_settle of this lattice on the two forms in turn")
     ap.add_argument("--meshgran", action="store_true",
                     help="instead: the meshGran port's loop on the two forms in turn")
+    ap.add_argument("--clusters", action="store_true",
+                    help="instead: the settled bed of clusters_settle.py on the two forms")
     ap.add_argument("--steps", type=int, default=5000)
     ap.add_argument("--rounds", type=int, default=3)
     args = ap.parse_args()
@@ -127,6 +164,9 @@ def main() -> None:
         return
     if args.meshgran:
         meshgran_ab(args.rounds)
+        return
+    if args.clusters:
+        clusters_ab(args.rounds, min(args.steps, 2000))
         return
     sims = [scene(*c) for c in CASES]
     t0 = time.perf_counter()
