@@ -62,88 +62,71 @@ def scene(m: int, side: float | None, n_spheres: int):
     return sim
 
 
-def box_settle_ab(lattice: list[int], steps: int, rounds: int) -> None:
-    """box_settle (``box_settle.run_dpm``, one thread, a new scene each run) on the two
-    forms in turn, ``rounds`` pairs after one untimed pair; particle-steps per second."""
+def forms_in_turn(label: str, measure, rounds: int, field: str, unit: str, stem: str,
+                  ratio_name: str = "one_thread_over_parallel", **meta) -> None:
+    """``measure()`` (one figure, in ``unit``) on the parallel form, then the one-thread
+    form, ``rounds`` pairs after one untimed pair; prints each, writes ``results/<stem>.json``
+    (``meta``, the figures under ``field``, their medians and one-thread over parallel)."""
     import statistics
 
-    import box_settle
-
-    rates: dict[str, list[float]] = {"parallel": [], "one_thread": []}
+    vals: dict[str, list[float]] = {"parallel": [], "one_thread": []}
     for r in range(rounds + 1):
         for flag, key in (("0", "parallel"), ("1", "one_thread")):
-            os.environ["DPM_ONE_THREAD_FORM"] = flag
-            d = box_settle.run_dpm(lattice, steps, threads=1)
+            os.environ["DPM_ONE_THREAD_FORM"] = flag  # (read at each run's start)
+            v = measure()
             if r:
-                rates[key].append(d["particle_steps_per_s"])
-                print(f"box_settle {'x'.join(map(str, lattice))} {key} form: "
-                      f"{d['particle_steps_per_s']:.4g} particle-steps/s", flush=True)
-    med = {k: statistics.median(v) for k, v in rates.items()}
-    out = {"lattice": lattice, "steps": steps, "particle_steps_per_s": rates,
-           "median": med, "one_thread_over_parallel": med["one_thread"] / med["parallel"]}
-    print(f"medians: parallel {med['parallel']:.4g}, one-thread {med['one_thread']:.4g}: "
-          f"{out['one_thread_over_parallel']:.3f}")
-    path = Path(__file__).resolve().parent / "results" / "step_forms_box_settle.json"
+                vals[key].append(v)
+                print(f"{label} {key} form: {v:.4g} {unit}", flush=True)
+    med = {k: statistics.median(v) for k, v in vals.items()}
+    out = meta | {field: vals, "median": med,
+                  ratio_name: med["one_thread"] / med["parallel"]}
+    print(f"medians: parallel {med['parallel']:.4g}, one-thread {med['one_thread']:.4g} "
+          f"{unit}: one-thread / parallel {out[ratio_name]:.3f}")
+    path = Path(__file__).resolve().parent / "results" / f"{stem}.json"
     path.write_text(json.dumps(out, indent=1))
+
+
+def box_settle_ab(lattice: list[int], steps: int, rounds: int) -> None:
+    """box_settle (``box_settle.run_dpm``, one thread, a new scene each run) on the two
+    forms in turn; particle-steps per second."""
+    import box_settle
+
+    forms_in_turn(f"box_settle {'x'.join(map(str, lattice))}",
+                  lambda: box_settle.run_dpm(lattice, steps, threads=1)["particle_steps_per_s"],
+                  rounds, "particle_steps_per_s", "particle-steps/s", "step_forms_box_settle",
+                  lattice=lattice, steps=steps)
 
 
 def meshgran_ab(rounds: int) -> None:
     """The meshGran port's dpm loop (``meshgran.run_dpm``: 500 spheres streamed in over
-    0.5 s, run to 2.5 s, one thread) on the two forms in turn, ``rounds`` pairs after one
-    untimed pair; particle-steps per second over the whole loop."""
-    import statistics
-
+    0.5 s, run to 2.5 s, one thread) on the two forms in turn; particle-steps per second
+    over the whole loop."""
     import meshgran
 
-    rates: dict[str, list[float]] = {"parallel": [], "one_thread": []}
-    for r in range(rounds + 1):
-        for flag, key in (("0", "parallel"), ("1", "one_thread")):
-            os.environ["DPM_ONE_THREAD_FORM"] = flag
-            d = meshgran.run_dpm(0.5, 2.5)
-            if r:
-                rates[key].append(d["particle_steps_per_s"])
-                print(f"meshGran {key} form: {d['particle_steps_per_s']:.4g} "
-                      f"particle-steps/s, loop {d['loop_s']:.2f} s", flush=True)
-    med = {k: statistics.median(v) for k, v in rates.items()}
-    out = {"particle_steps_per_s": rates, "median": med,
-           "one_thread_over_parallel": med["one_thread"] / med["parallel"]}
-    print(f"medians: parallel {med['parallel']:.4g}, one-thread {med['one_thread']:.4g}: "
-          f"{out['one_thread_over_parallel']:.3f}")
-    path = Path(__file__).resolve().parent / "results" / "step_forms_meshgran.json"
-    path.write_text(json.dumps(out, indent=1))
+    forms_in_turn("meshGran", lambda: meshgran.run_dpm(0.5, 2.5)["particle_steps_per_s"],
+                  rounds, "particle_steps_per_s", "particle-steps/s", "step_forms_meshgran")
 
 
 def clusters_ab(rounds: int, steps: int) -> None:
     """``clusters_settle.py``'s 2,000 four-sphere clusters from its own lattice start,
     settled on two threads (its settle steps), then on one thread the two forms in turn on
-    that bed, ``rounds`` pairs of ``steps`` steps after one untimed pair; us per step."""
-    import statistics
-
+    that bed, ``steps`` steps each; us per step."""
     import clusters_settle as cs
 
     geo = cs.geometry(2000, side=0.035)
     sim = cs.scene(cs.own_start(2000, geo), geo)
     sim.threads = 2
-    os.environ["DPM_ONE_THREAD_FORM"] = "1"
     sim.run(steps=geo["settle_steps"], progress=False)
     sim.threads = 1
-    us: dict[str, list[float]] = {"parallel": [], "one_thread": []}
-    for r in range(rounds + 1):
-        for flag, key in (("0", "parallel"), ("1", "one_thread")):
-            os.environ["DPM_ONE_THREAD_FORM"] = flag
-            t = time.perf_counter()
-            sim.run(steps=steps, progress=False)
-            if r:
-                us[key].append((time.perf_counter() - t) / steps * 1e6)
-                print(f"settled clusters {key} form: {us[key][-1]:.1f} us per step",
-                      flush=True)
-    med = {k: statistics.median(v) for k, v in us.items()}
-    out = {"bodies": 2000, "steps_each": steps, "us_per_step": us, "median": med,
-           "one_thread_over_parallel_time": med["one_thread"] / med["parallel"]}
-    print(f"medians: parallel {med['parallel']:.1f}, one-thread {med['one_thread']:.1f} us "
-          f"per step: time ratio {out['one_thread_over_parallel_time']:.3f}")
-    path = Path(__file__).resolve().parent / "results" / "step_forms_clusters.json"
-    path.write_text(json.dumps(out, indent=1))
+
+    def us_per_step() -> float:
+        t = time.perf_counter()
+        sim.run(steps=steps, progress=False)
+        return (time.perf_counter() - t) / steps * 1e6
+
+    forms_in_turn("settled clusters", us_per_step, rounds, "us_per_step", "us per step",
+                  "step_forms_clusters", "one_thread_over_parallel_time", bodies=2000,
+                  steps_each=steps)
 
 
 def main() -> None:

@@ -44,10 +44,11 @@ SORT_EVERY = 20
 FORCE_PASSES = ("auto", "fused", "two_pass")
 
 
-def one_thread_form_on() -> bool:
-    """Whether runs on one thread take the step module's one-thread form (default yes;
-    ``$DPM_ONE_THREAD_FORM=0``: the parallel form on any thread count, for an A/B)."""
-    return os.environ.get("DPM_ONE_THREAD_FORM", "1") not in ("0", "", "no", "false")
+def one_thread_form_now() -> bool:
+    """Whether a step called now takes the step module's one-thread form: numba runs one
+    thread (set by the run) and ``$DPM_ONE_THREAD_FORM`` is not "0" (an A/B switch)."""
+    return (numba.get_num_threads() == 1
+            and os.environ.get("DPM_ONE_THREAD_FORM", "1") not in ("0", "", "no", "false"))
 
 
 def default_threads() -> int:
@@ -197,8 +198,7 @@ class CpuBackend:
         plan = self.sim.plan
         fused = (plan.spheres_only if self.force_pass == "auto"
                  else self.force_pass == "fused" and plan.spheres_only)
-        want = (fused, self.one_thread_ok and one_thread_form_on()
-                and numba.get_num_threads() == 1)
+        want = (fused, self.one_thread_ok and one_thread_form_now())
         if self.module is None or self._form != want:
             self._form = want
             self._compiled = False
