@@ -816,23 +816,27 @@ class Simulation:
                 return int(steps)
             return max(0, math.ceil((until - self.time) / self.dt - 1e-9))
 
-        if not self._prepared:
-            if self.inlets and not self._forces_valid and (
-                    self.step_count == 0 or len(self.bodies) == 0):
-                population.flow_event(self)  # an inlet may fill an empty scene
-                if len(self.bodies) == 0 and math.isfinite(self.dt):  # (dt="auto": no)
-                    skipped = population.wait_for_inlets(self, wanted())
-                    if steps is not None:
-                        steps = int(steps) - skipped
-                    if len(self.bodies) == 0:
-                        return  # (the inlets start later than this run ends)
-            self._prepare()
-        elif not self._dt_checked:  # dt (or dt_check) changed since the last run
-            self._check_time_step()
-        nsteps = wanted()
         threads_before = numba.get_num_threads()
-        numba.set_num_threads(self.backend.thread_count(len(self.elements)))
         try:
+            if not self._prepared:
+                if self.inlets and not self._forces_valid and (
+                        self.step_count == 0 or len(self.bodies) == 0):
+                    population.flow_event(self)  # an inlet may fill an empty scene
+                    if len(self.bodies) == 0 and math.isfinite(self.dt):  # (dt="auto": no)
+                        skipped = population.wait_for_inlets(self, wanted())
+                        if steps is not None:
+                            steps = int(steps) - skipped
+                        if len(self.bodies) == 0:
+                            return  # (the inlets start later than this run ends)
+                # the run's thread count before the backend loads its step module: the
+                # module's form follows it (dpm.backends.cpu.one_thread_form_now), and a
+                # module loaded under another count would be compiled for nothing
+                numba.set_num_threads(self.backend.thread_count(len(self.elements)))
+                self._prepare()
+            elif not self._dt_checked:  # dt (or dt_check) changed since the last run
+                self._check_time_step()
+            nsteps = wanted()
+            numba.set_num_threads(self.backend.thread_count(len(self.elements)))
             self._run(nsteps, progress)
         finally:
             numba.set_num_threads(threads_before)

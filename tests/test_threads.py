@@ -138,3 +138,31 @@ def test_a_run_on_one_thread_takes_the_one_thread_form(monkeypatch):
     assert "prange(" in Path(two.__file__).read_text()
     monkeypatch.setenv("DPM_ONE_THREAD_FORM", "0")
     assert module_of(1) is two
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 threads")
+def test_a_run_loads_only_the_form_of_its_own_thread_count(monkeypatch):
+    """The run sets its thread count before the scene is planned and handed to the
+    backend, so that a one-thread run in a process of several numba threads never loads
+    (and compiles) the parallel form as well: the first run of a scene compiled both
+    before, and a cold cache paid for a module it never stepped on."""
+    from dpm.plan import ScenePlan
+
+    asked = []
+    module = ScenePlan.module
+
+    def spy(self, fused, one_thread=False):
+        asked.append(one_thread)
+        return module(self, fused, one_thread)
+
+    monkeypatch.setattr(ScenePlan, "module", spy)
+    numba.set_num_threads(2)  # (the process's count outside the run)
+    sim = _scene(1)
+    sim.run(steps=5, progress=False)
+    sim.run(steps=5, progress=False)
+    assert asked and all(asked), asked
+    assert numba.get_num_threads() == 2  # (restored after each run)
+    asked.clear()
+    sim = _scene(2)
+    sim.run(steps=5, progress=False)
+    assert asked and not any(asked), asked
