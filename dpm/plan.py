@@ -316,7 +316,7 @@ def _splice(template: str, lines: list[str]) -> str:
 
 #: kernel files that every step module calls but that do not depend on the scene (the
 #: neighbour-list build: four parallel loops, ~21 s of a scene's ~85 s cold compile on 2
-#: cores, benchmarks/NOTES.md row 51). The step modules import them from a generated copy
+#: cores, benchmarks/NOTES.md row 52). The step modules import them from a generated copy
 #: compiled with numba's cache on, named like a step module by every kernel source, so
 #: they compile once per machine instead of once per scene kind. (The library files
 #: themselves stay uncached: numba's cache of a function does not notice a change in a
