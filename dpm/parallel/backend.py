@@ -18,6 +18,10 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   balance`` threshold; 1.1 by default), always after the population changed, and at a
   list rebuild inside a call when the ranks' modelled costs (or, ``weight="time"``,
   their seconds per step) differ by more than ``rebalance`` (:meth:`_recut_in_call`).
+  By default (``weight="fit"``) the weight of a touching contact in the model is fitted
+  at each list rebuild to the ranks' measured seconds per step
+  (:func:`dpm.parallel.decomposition.fit_touching_weight`), so that the model follows what
+  contacts cost in this scene on this machine.
 - **Ownership and ghosts**: a rank owns the bodies whose centre lies in its box and holds
   as ghosts every body of another rank with a listed contact partner among its own
   elements (at a call's start), or within 2 r_max + skin (+ the body's own extent) of its
@@ -102,7 +106,7 @@ class MpiBackend(CpuBackend):
     name = "mpi"
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
-                 rebalance: float = 1.1, boxes: Any = None, weight: str = "cost",
+                 rebalance: float = 1.1, boxes: Any = None, weight: str = "fit",
                  comm: Any = None, loop: str = "auto") -> None:
         super().__init__(threads=threads, force_pass=force_pass)
         if loop not in ("auto", "compiled", "python"):
@@ -115,15 +119,24 @@ class MpiBackend(CpuBackend):
         #: :func:`dpm.parallel.native.handles` allows it); ``loop_used`` says which ran
         self.loop = loop
         self.loop_used = ""
-        if weight not in ("cost", "time"):
+        if weight not in ("cost", "fit", "time"):
             raise ParameterError(f"MpiBackend(): weight={weight!r}; allowed: cost (elements "
-                                 "and touching contacts), time (that, scaled by each rank's "
-                                 "measured step time)")
-        #: how a re-cut weighs the bodies: "cost" (elements and touching contacts) or
-        #: "time" (the cost scaled by each rank's measured step time per unit of cost, as
-        #: LIGGGHTS' ``balance ... weight time``: evens the ranks' times on a quiet
-        #: machine, follows noise on a shared one)
+                                 "and touching contacts), fit (the same, the weight of a "
+                                 "touching contact fitted to the ranks' measured step "
+                                 "times), time (the cost scaled by each rank's measured "
+                                 "step time)")
+        #: how a re-cut weighs the bodies: "cost" (elements and touching contacts at
+        #: ``TOUCHING_WEIGHT``: the cut depends on the state only, so a run repeats bit
+        #: for bit), "fit" (the touching weight fitted at each list rebuild to the ranks'
+        #: measured seconds per step, :func:`dpm.parallel.decomposition.fit_touching_weight`:
+        #: the model follows what a scene's contacts cost on this machine; the cut, and so
+        #: the round-off, then depends on timing) or "time" (the cost scaled by each rank's
+        #: measured step time per unit of cost, as LIGGGHTS' ``balance ... weight time``:
+        #: evens the ranks' times on a quiet machine, follows noise on a shared one)
         self.weight = weight
+        #: the weight of a touching contact side in elements (fitted with weight "fit")
+        self.touching_weight = self.TOUCHING_WEIGHT
+        self._fit_samples: list = []
         if boxes is not None:
             boxes = np.asarray(boxes, float)
             if boxes.ndim != 3 or boxes.shape[1:] != (2, 3) or np.any(
@@ -169,7 +182,9 @@ class MpiBackend(CpuBackend):
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         # (checkpoints written before the compiled loop: its attributes at defaults)
-        super().__setstate__({"loop": "auto", "loop_used": "", "_hp": {}} | state)
+        super().__setstate__({"loop": "auto", "loop_used": "", "_hp": {},
+                              "touching_weight": self.TOUCHING_WEIGHT, "_fit_samples": []}
+                             | state)
 
     # ------------------------------------------------------------------ communicator
     @property
@@ -428,6 +443,7 @@ class MpiBackend(CpuBackend):
         self.timing["recut_s"] = t_recut
         self.timing["work_s"] = t_work
         self.timing["wait_s"] = t_wait
+        self.timing["touching_weight"] = self.touching_weight
         for k in ("calls", "steps", "rebuilds", "recuts", "steps_s", "work_s", "halo_s",
                   "wait_s", "migrate_s", "recut_s", "gather_s", "scatter_s"):
             self.totals[k] = self.totals.get(k, 0.0) + self.timing[k]
@@ -525,11 +541,12 @@ class MpiBackend(CpuBackend):
         nb = len(b)
         weight = np.diff(b.element_start).astype(float)
         act = (pairs.act != 0).astype(float)
-        weight += self.TOUCHING_WEIGHT * (np.bincount(e.owner[pairs.i], act, minlength=nb)
-                                          + np.bincount(e.owner[pairs.j], act, minlength=nb))
+        tw = self.touching_weight
+        weight += tw * (np.bincount(e.owner[pairs.i], act, minlength=nb)
+                        + np.bincount(e.owner[pairs.j], act, minlength=nb))
         wc = sim.wall_contacts
         rows = np.repeat(np.arange(len(wc.start) - 1), np.diff(wc.start))
-        weight += 2.0 * self.TOUCHING_WEIGHT * np.bincount(
+        weight += 2.0 * tw * np.bincount(
             e.owner[rows], (wc.active[:wc.count] != 0).astype(float), minlength=nb)
         return weight, pairs
 
@@ -659,9 +676,10 @@ class MpiBackend(CpuBackend):
                     b.element_start, e.offset, e.position, not loc.plan.spheres_only)
 
     # ------------------------------------------------------------------ re-cut in a call
-    def _owned_cost(self) -> np.ndarray:
-        """This rank's owned bodies' modelled cost (as :meth:`_cost` counts it on the
-        host) from its own lists."""
+    def _owned_parts(self) -> tuple[np.ndarray, np.ndarray]:
+        """This rank's owned bodies' elements and touching contact sides (a boundary
+        contact counts twice), from its own lists: the two parts of the modelled cost
+        (:meth:`_cost` counts them on the host)."""
         loc = self.local
         b, e, c = loc.bodies, loc.elements, loc.contacts
         n_own, ne = loc.n_owned, len(e.owner)
@@ -674,9 +692,19 @@ class MpiBackend(CpuBackend):
         per_elem += 2.0 * np.bincount(np.repeat(np.arange(ne), np.diff(w.start[:ne + 1])),
                                       (w.active[:w.count] != 0).astype(float),
                                       minlength=ne)[:ne]
-        per_elem *= self.TOUCHING_WEIGHT
-        per_elem += 1.0  # (the element itself)
-        return np.bincount(e.owner, weights=per_elem, minlength=len(b))[:n_own]
+        touching = np.bincount(e.owner, weights=per_elem, minlength=len(b))[:n_own]
+        elements = np.diff(b.element_start[:n_own + 1]).astype(float)
+        return elements, touching
+
+    def _owned_cost(self) -> np.ndarray:
+        """This rank's owned bodies' modelled cost from its own lists."""
+        elements, touching = self._owned_parts()
+        return elements + self.touching_weight * touching
+
+    #: intervals between rebuilds that the touching weight's fit keeps (the latest), and
+    #: the fewest steps an interval needs to count (its times are noise below)
+    FIT_INTERVALS = 16
+    FIT_MIN_STEPS = 20
 
     def _recut_in_call(self, work: float, steps: int) -> bool:
         """At a list rebuild inside a call (collective): cut the domain again when the
@@ -692,11 +720,21 @@ class MpiBackend(CpuBackend):
         from mpi4py import MPI
 
         comm, P, me = self.comm, self.ranks, self.rank
-        weight = self._owned_cost()
+        elements, touching = self._owned_parts()
         n_own = self.local.n_owned
-        mine = np.array([weight.sum(), work / steps, n_own])
-        every = np.empty((P, 3))
+        mine = np.array([elements.sum(), touching.sum(), work / steps, n_own])
+        every = np.empty((P, 4))
         comm.Allgather([mine, MPI.DOUBLE], [every, MPI.DOUBLE])
+        if self.weight == "fit" and steps >= self.FIT_MIN_STEPS:
+            # (every rank fits the same gathered figures alike: the same weight)
+            self._fit_samples = (self._fit_samples + [
+                (every[:, 0].copy(), every[:, 1].copy(), every[:, 2].copy(), float(steps))
+            ])[-self.FIT_INTERVALS:]
+            self.touching_weight = dec.fit_touching_weight(self._fit_samples,
+                                                           self.TOUCHING_WEIGHT)
+        tw = self.touching_weight
+        weight = elements + tw * touching
+        every = np.column_stack([every[:, 0] + tw * every[:, 1], every[:, 2:]])
         due = dec.imbalance(every[:, 0]) > self.rebalance
         if self.weight == "time":
             due = dec.imbalance(every[:, 1]) > self.rebalance

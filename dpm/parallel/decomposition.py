@@ -94,3 +94,39 @@ def imbalance(costs: np.ndarray) -> float:
     costs = np.asarray(costs, float)
     mean = costs.mean()
     return float(costs.max() / mean) if mean > 0 else 1.0
+
+
+#: the touching weights a fit chooses among (per touching side, in elements)
+FIT_GRID = np.geomspace(0.05, 20.0, 121)
+
+
+def fit_touching_weight(samples: list[tuple[np.ndarray, np.ndarray, np.ndarray, float]],
+                        prior: float) -> float:
+    """The weight x of a touching contact side, in elements, that makes the ranks' modelled
+    costs ``E_r + x T_r`` proportional to their measured seconds per step ``w_r``.
+
+    ``samples``: per interval between list rebuilds, each rank's owned elements ``E``,
+    touching sides ``T`` (a boundary contact counts twice) and ``w``, with the interval's
+    steps as its weight. Each interval gets its own scale (the machine's speed drifts;
+    only the ranks' ratios within an interval inform x): the residual of ``w`` against
+    ``s (E + x T)`` with the best ``s``, relative to ``|w|``, summed over the intervals,
+    is least at the chosen x (a grid, :data:`FIT_GRID`). Where the data do not tell the
+    weights apart (ranks of alike composition: then x does not matter for the balance),
+    the grid point nearest ``prior`` wins.
+    """
+    x = FIT_GRID
+    total = np.zeros(len(x))
+    for e, t, w, steps in samples:
+        m = e[None, :] + x[:, None] * t[None, :]  # (grid, ranks)
+        ww = float(w @ w)
+        mm = np.einsum("gr,gr->g", m, m)
+        if ww <= 0 or np.any(mm <= 0):
+            continue
+        s = (m @ w) / mm
+        total += steps * np.einsum("gr,gr->g", w[None, :] - s[:, None] * m,
+                                   w[None, :] - s[:, None] * m) / ww
+    if not np.any(total > 0):
+        return float(prior)
+    # (a flat residual: ties within a part in 1e-6 go to the grid point nearest the prior)
+    near = total <= total.min() * (1 + 1e-6) + 1e-300
+    return float(x[near][np.argmin(np.abs(np.log(x[near] / prior)))])
