@@ -6,6 +6,7 @@ from __future__ import annotations
 import inspect
 import math
 import os
+import sys
 import time as _time
 import warnings
 from collections.abc import Sequence
@@ -26,7 +27,11 @@ from .backends.base import (
     Backend,
     StepResult,
 )
-from .backends.cpu import SMALL_SCENE, default_threads  # noqa: F401  (public names)
+from .backends.cpu import (
+    SMALL_SCENE,  # noqa: F401  (public names)
+    default_threads,  # noqa: F401
+    threading_layer_advice,
+)
 from .boundaries.base import Boundary
 from .boundaries.joints import join_pipe_ends
 from .errors import ParameterError
@@ -43,6 +48,7 @@ from .regions import Region
 from .shapes.base import Shape
 from .state import Bodies, BoundaryTable, Contacts, Elements, WallContacts
 from .timestep import TimeStepReport, scene_report, smallest_pair
+from .warm import _quiet
 
 DT_CHECKS = ("refuse", "warn", "off")
 #: most steps per kernel call while boundaries move (frames are tabulated per call)
@@ -836,7 +842,11 @@ class Simulation:
             elif not self._dt_checked:  # dt (or dt_check) changed since the last run
                 self._check_time_step()
             nsteps = wanted()
-            numba.set_num_threads(self.backend.thread_count(len(self.elements)))
+            threads = self.backend.thread_count(len(self.elements))
+            numba.set_num_threads(threads)
+            advice = threading_layer_advice(threads)
+            if advice and not _quiet():
+                print(f"dpm: {advice}", file=sys.stderr, flush=True)
             self._run(nsteps, progress)
         finally:
             numba.set_num_threads(threads_before)

@@ -166,3 +166,39 @@ def test_a_run_loads_only_the_form_of_its_own_thread_count(monkeypatch):
     sim = _scene(2)
     sim.run(steps=5, progress=False)
     assert asked and not any(asked), asked
+
+
+def test_a_threading_layer_chosen_before_dpm_is_named(monkeypatch):
+    """numba takes its threading layer at a process's first parallel launch; one made
+    before ``import dpm`` (which puts OpenMP first) leaves TBB or the workqueue in place,
+    and a run on several threads says so once, with what to do."""
+    from dpm.backends import cpu
+
+    monkeypatch.delenv("NUMBA_THREADING_LAYER", raising=False)
+    monkeypatch.setattr(cpu, "_LAYER_WARNED", [])
+    monkeypatch.setattr(numba, "threading_layer", lambda: "tbb")
+    assert cpu.threading_layer_advice(1) is None  # one thread: no parallel launches
+    text = cpu.threading_layer_advice(2)
+    assert text is not None and "'tbb'" in text and "NUMBA_THREADING_LAYER=omp" in text
+    assert cpu.threading_layer_advice(2) is None  # once per process
+    monkeypatch.setattr(cpu, "_LAYER_WARNED", [])
+    monkeypatch.setattr(numba, "threading_layer", lambda: "omp")
+    assert cpu.threading_layer_advice(2) is None
+    monkeypatch.setattr(numba, "threading_layer", lambda: "workqueue")
+    monkeypatch.setenv("NUMBA_THREADING_LAYER", "workqueue")  # the user's choice
+    assert cpu.threading_layer_advice(2) is None
+
+
+def test_dpm_puts_openmp_first_in_a_fresh_process():
+    import os
+    import subprocess
+    import sys
+
+    pytest.importorskip("numba.np.ufunc.omppool", reason="no OpenMP layer on this machine")
+    code = ("import dpm, numba, numpy as np\n"
+            "f = numba.njit(parallel=True)(lambda a: a.sum())\n"
+            "f(np.ones(10)); print(numba.threading_layer())")
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_THREADING_LAYER"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=env, check=True)
+    assert out.stdout.split()[-1] == "omp", out
