@@ -4,7 +4,8 @@ The issue's goal for clustered bodies is two threads at least 1.8x one thread in
 settled bed. Whether a machine allows that depends on how its memory serves two cores,
 so this script measures, in one process, one thread against two:
 
-- the machine: a compute-bound loop (arithmetic on a small array, no memory traffic), a
+- the machine: the cost of one parallel launch (a loop too short to share), a
+  compute-bound loop (arithmetic on a small array, no memory traffic), a
   streaming sum over 64 MB, and a random gather over 32 MB (what a contact pass does when
   it reads its partners' rows);
 - the settled bed of ``clusters_settle.py`` (2,000 four-sphere clusters from its own
@@ -19,8 +20,9 @@ so this script measures, in one process, one thread against two:
 Each figure is the best of ``--reps`` timings, 1 and 2 threads in turn; the ratio is
 one-thread time over two-thread time. numba's threading layer is the one a dpm run takes
 (OpenMP first: ``dpm/__init__.py``; TBB's parallel launch costs ~30 us on 2 threads of
-this machine against OpenMP's ~3, benchmarks/NOTES.md row 6).
-Writes ``results/thread_ceiling.json``.
+this machine against OpenMP's ~3: the ``parallel_launch`` probe).
+``NUMBA_THREADING_LAYER=tbb python benchmarks/thread_ceiling.py --tag thread_ceiling_tbb``
+measures the same on TBB. Writes ``results/<tag>.json``.
 
     python benchmarks/thread_ceiling.py
 """
@@ -51,6 +53,12 @@ def _compute(x, out, rounds):
         for _ in range(rounds):
             v = 0.5 * v + 1.0 / (1.0 + v * v)
         out[i] = v
+
+
+@njit(parallel=True, cache=True)
+def _launch(a):
+    for i in prange(a.shape[0]):
+        a[i] += 1.0
 
 
 @njit(parallel=True, cache=True)
@@ -95,7 +103,16 @@ def machine(reps: int) -> dict:
     big = rng.uniform(0, 1, 8_000_000)  # 64 MB
     table = rng.uniform(0, 1, 4_000_000)  # 32 MB
     idx = rng.integers(0, len(table), 4_000_000)
-    return {"compute": in_turn(lambda: _compute(x, out, 2000), reps),
+    small = np.zeros(64)
+
+    def launches():  # (2,000 launches of a loop too short to be worth a thread)
+        for _ in range(2000):
+            _launch(small)
+
+    launch = in_turn(launches, reps)
+    launch["us_per_launch"] = {k: launch[f"{k}_s"] / 2000 * 1e6
+                               for k in ("one_thread", "two_threads")}
+    return {"parallel_launch": launch, "compute": in_turn(lambda: _compute(x, out, 2000), reps),
             "stream_64MB": in_turn(lambda: _stream(big), reps),
             "random_gather_32MB": in_turn(lambda: _gather(table, idx), reps)}
 
@@ -119,6 +136,7 @@ def clusters(reps: int, steps: int) -> dict:
     rebuilds = (sim.rebuild_count - rebuilds) / ran
     # the passes on the parallel form (the one a two-thread run takes), one and two threads
     os.environ["DPM_ONE_THREAD_FORM"] = "0"
+    whole["parallel_form_1"] = run(1)  # (like for like with the passes below)
     sim.threads = 2
     sim.run(steps=1, progress=False)
     be, dt = sim.backend, sim.dt
@@ -143,9 +161,13 @@ def clusters(reps: int, steps: int) -> dict:
             "step": {"one_thread_s": whole[1], "two_threads_s": whole[2],
                      "speedup": whole[1] / whole[2],
                      "what": "sim.run as a user runs it: one-thread form against two threads"},
+            "step_parallel_form": {"one_thread_s": whole["parallel_form_1"],
+                                   "two_threads_s": whole[2],
+                                   "speedup": whole["parallel_form_1"] / whole[2]},
             "passes_parallel_form": passes, "rebuilds_per_step": rebuilds,
             "passes_per_step_s": per_step,
-            "rest_of_step_s": {"one_thread": whole[1] - per_step["one_thread"],
+            "rest_of_step_s": {"one_thread": whole["parallel_form_1"]
+                               - per_step["one_thread"],
                                "two_threads": whole[2] - per_step["two_threads"]}}
 
 
@@ -153,15 +175,21 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--steps", type=int, default=500)
+    ap.add_argument("--tag", default="thread_ceiling", help="results/<tag>.json")
     a = ap.parse_args()
     os.environ.setdefault("DPM_KERNELS", "scene")
     out = {"cores": os.cpu_count(), "machine": machine(a.reps),
            "threading_layer": numba.threading_layer()}
+    print(f"threading layer: {out['threading_layer']}")
     for k, v in out["machine"].items():
         print(f"machine {k}: 2 threads {v['speedup']:.2f}x one", flush=True)
+    us = out["machine"]["parallel_launch"]["us_per_launch"]
+    print(f"a parallel launch: {us['one_thread']:.1f} us on one thread, "
+          f"{us['two_threads']:.1f} us on two")
     out["settled_clusters"] = clusters(a.reps, a.steps)
     cl = out["settled_clusters"]
-    print(f"settled clusters, whole step: 2 threads {cl['step']['speedup']:.2f}x one")
+    print(f"settled clusters, whole step: 2 threads {cl['step']['speedup']:.2f}x one "
+          f"(on the parallel form at both: {cl['step_parallel_form']['speedup']:.2f}x)")
     for k, v in cl["passes_parallel_form"].items():
         print(f"  {k}: {v['one_thread_s'] * 1e6:.0f} / {v['two_threads_s'] * 1e6:.0f} us, "
               f"{v['speedup']:.2f}x")
@@ -169,7 +197,7 @@ def main() -> None:
           f"the passes and the rebuilds' share): {cl['rest_of_step_s']['one_thread'] * 1e6:.0f}"
           f" / {cl['rest_of_step_s']['two_threads'] * 1e6:.0f} us")
     out["date"] = time.strftime("%Y-%m-%d")
-    path = HERE / "results" / "thread_ceiling.json"
+    path = HERE / "results" / f"{a.tag}.json"
     path.write_text(json.dumps(out, indent=1))
     print("->", path)
 

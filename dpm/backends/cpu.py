@@ -73,10 +73,11 @@ def threading_layer_advice(threads: int) -> str | None:
     """A warning (once per process) when a run on several threads finds numba on another
     threading layer than OpenMP although OpenMP is there and ``$NUMBA_THREADING_LAYER``
     does not ask for it: numba chose its layer at the process's first parallel launch,
-    before ``import dpm`` put OpenMP first. On a 2-core machine TBB's parallel launch
-    costs 30-260 us against OpenMP's 2.6 us, and a settled bed of 2,000 clusters gained
-    1.30x from two threads on TBB against 1.67x on OpenMP (benchmarks/NOTES.md rows 6
-    and 54). None when there is nothing to say."""
+    before ``import dpm`` put OpenMP first. On a 2-core machine a parallel launch on two
+    threads costs 169 us on TBB against 4.2 us on OpenMP, and a settled bed of 2,000
+    clusters gains 1.46x from two threads on TBB against 1.67x on OpenMP
+    (``benchmarks/thread_ceiling.py``, benchmarks/NOTES.md row 54). None when there is
+    nothing to say."""
     if threads <= 1 or _LAYER_WARNED or "NUMBA_THREADING_LAYER" in os.environ:
         return None
     try:
@@ -91,8 +92,8 @@ def threading_layer_advice(threads: int) -> str | None:
         return None
     _LAYER_WARNED.append(True)
     return (f"numba runs its parallel loops on its {layer!r} threading layer, chosen by a "
-            "parallel launch before `import dpm`; OpenMP's launches are ~10x cheaper on "
-            "some machines (two threads 1.67x one on a settled bed against 1.30x). Import "
+            "parallel launch before `import dpm`; OpenMP's launches can be far cheaper "
+            "(169 us against 4 us on two threads of one 2-core machine). Import "
             "dpm first, or set NUMBA_THREADING_LAYER=omp (or to the layer you want, which "
             "also silences this).")
 

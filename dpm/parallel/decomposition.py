@@ -122,9 +122,8 @@ def fit_touching_weight(samples: list[tuple[np.ndarray, np.ndarray, np.ndarray, 
         mm = np.einsum("gr,gr->g", m, m)
         if ww <= 0 or np.any(mm <= 0):
             continue
-        s = (m @ w) / mm
-        total += steps * np.einsum("gr,gr->g", w[None, :] - s[:, None] * m,
-                                   w[None, :] - s[:, None] * m) / ww
+        r = w[None, :] - ((m @ w) / mm)[:, None] * m  # residual at the best scale
+        total += steps * np.einsum("gr,gr->g", r, r) / ww
     if not np.any(total > 0):
         return float(prior)
     # (a flat residual: ties within a part in 1e-6 go to the grid point nearest the prior)
