@@ -70,7 +70,7 @@ def main() -> None:
     split = {k: [{f: round(row.get(f, 0.0), 4) for f in
                   ("steps_s", "work_s", "halo_s", "wait_s", "migrate_s", "gather_s",
                    "scatter_s",
-                   "calls", "rebuilds", "recuts", "owned", "ghosts")}
+                   "calls", "rebuilds", "recuts", "owned", "ghosts", "touching_weight")}
                  for row in last[k]["ranks"]] for k in last}
     out = {"a": str(args.a), "b": str(args.b), "lattice": args.lattice,
            "steps": args.steps, "ranks": args.ranks, "particle_steps_per_s": rates,

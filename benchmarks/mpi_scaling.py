@@ -77,6 +77,7 @@ def worker(lat: tuple[int, int, int], steps: int, out: str, threads: int) -> Non
     tot = dict(getattr(be, "totals", {}))
     tim = dict(getattr(be, "timing", {}))
     rows = [tot | {"owned": tim.get("owned", n), "ghosts": tim.get("ghosts", 0),
+                   "touching_weight": tim.get("touching_weight", 0.0),
                    "halo_bytes_per_step": tim.get("halo_bytes_per_step", 0.0)}]
     if dpm.parallel.launched_ranks() > 1:
         from mpi4py import MPI
