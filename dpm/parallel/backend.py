@@ -18,7 +18,7 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   balance`` threshold; 1.1 by default), always after the population changed, and at a
   list rebuild inside a call when the ranks' modelled costs (or, ``weight="time"``,
   their seconds per step) differ by more than ``rebalance`` (:meth:`_recut_in_call`).
-  By default (``weight="fit"``) the weight of a touching contact in the model is fitted
+  With ``weight="fit"`` the weight of a touching contact in the model is fitted
   at each list rebuild to the ranks' measured seconds per step
   (:func:`dpm.parallel.decomposition.fit_touching_weight`), so that the model follows what
   contacts cost in this scene on this machine.
@@ -106,7 +106,7 @@ class MpiBackend(CpuBackend):
     name = "mpi"
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
-                 rebalance: float = 1.1, boxes: Any = None, weight: str = "fit",
+                 rebalance: float = 1.1, boxes: Any = None, weight: str = "cost",
                  comm: Any = None, loop: str = "auto") -> None:
         super().__init__(threads=threads, force_pass=force_pass)
         if loop not in ("auto", "compiled", "python"):
