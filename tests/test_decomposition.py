@@ -52,3 +52,21 @@ def test_fit_keeps_the_prior_where_the_times_cannot_tell():
     # no contacts anywhere: the same
     assert dec.fit_touching_weight([(e, np.zeros(2), np.array([1.0, 1.2]), 100.0)],
                                    prior=0.5) == pytest.approx(0.5, rel=0.05)
+
+
+def test_fit_keeps_the_prior_against_scatter_the_compositions_do_not_explain():
+    """Two ranks, each interval alone fits some weight exactly; times scattered 5 % about
+    the prior's model (another job sharing a core now and then): the intervals disagree,
+    the best weight leaves most of the prior's residual, the prior stays. Without the
+    guard the same data pull the weight far off."""
+    rng = np.random.default_rng(3)
+    samples = []
+    for _ in range(16):
+        e = rng.uniform(45000, 55000, 2)
+        t = np.array([rng.uniform(30000, 35000), rng.uniform(20000, 25000)])
+        samples.append((e, t, _rank_times(e, t, 0.5, 80e-9, rng, 0.05), 100.0))
+    assert dec.fit_touching_weight(samples, prior=0.5) == 0.5
+    free = dec.fit_touching_weight(samples, prior=0.5, min_gain=np.inf)
+    assert abs(np.log(free / 0.5)) > np.log(1.2), free
+    # too few intervals decide nothing either
+    assert dec.fit_touching_weight(samples[:3], prior=0.5, min_gain=np.inf) == 0.5

@@ -20,8 +20,9 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   their seconds per step) differ by more than ``rebalance`` (:meth:`_recut_in_call`).
   With ``weight="fit"`` the weight of a touching contact in the model is fitted
   at each list rebuild to the ranks' measured seconds per step
-  (:func:`dpm.parallel.decomposition.fit_touching_weight`), so that the model follows what
-  contacts cost in this scene on this machine.
+  (:func:`dpm.parallel.decomposition.fit_touching_weight`; the default), so that the model
+  follows what contacts cost in this scene on this machine; ``weight="cost"`` keeps it
+  fixed.
 - **Ownership and ghosts**: a rank owns the bodies whose centre lies in its box and holds
   as ghosts every body of another rank with a listed contact partner among its own
   elements (at a call's start), or within 2 r_max + skin (+ the body's own extent) of its
@@ -69,6 +70,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
+import numba
 import numpy as np
 
 from ..backends.base import STATUS_NAN, STATUS_OK, STATUS_OVERLAP, StepResult
@@ -106,7 +108,7 @@ class MpiBackend(CpuBackend):
     name = "mpi"
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
-                 rebalance: float = 1.1, boxes: Any = None, weight: str = "cost",
+                 rebalance: float = 1.1, boxes: Any = None, weight: str = "fit",
                  comm: Any = None, loop: str = "auto") -> None:
         super().__init__(threads=threads, force_pass=force_pass)
         if loop not in ("auto", "compiled", "python"):
@@ -332,6 +334,9 @@ class MpiBackend(CpuBackend):
         t_work = 0.0  # (and in the whole call)
         clock = time.perf_counter
         t_start = clock()
+        # (this process's CPU seconds over the wall's since a re-cut check, per thread:
+        # the share of the machine the rank had; another job on its core shows in it)
+        cpu_since, wall_since = time.process_time(), t_start
         inner.diag[4] = 0.0
         inner.diag[5] = -1
         rec = None
@@ -399,10 +404,13 @@ class MpiBackend(CpuBackend):
             if rebuild:
                 t_work += work
                 t0 = clock()
-                if self._recut_in_call(work, s - since):
+                had = (time.process_time() - cpu_since) / max(
+                    (t0 - wall_since) * numba.get_num_threads(), 1e-300)
+                if self._recut_in_call(work, s - since, had):
                     recuts += 1
                 t_recut += clock() - t0
                 work, since = 0.0, s
+                cpu_since, wall_since = time.process_time(), clock()
                 t0 = clock()
                 self._migrate()
                 inner.rebuild()  # (history of the carried entries merged by pair)
@@ -706,7 +714,7 @@ class MpiBackend(CpuBackend):
     FIT_INTERVALS = 16
     FIT_MIN_STEPS = 20
 
-    def _recut_in_call(self, work: float, steps: int) -> bool:
+    def _recut_in_call(self, work: float, steps: int, had: float = 1.0) -> bool:
         """At a list rebuild inside a call (collective): cut the domain again when the
         ranks' modelled cost (``weight="cost"``) or their measured seconds per step in the
         step kernels (``weight="time"``) differ by more than ``rebalance``, so that a long
@@ -714,7 +722,10 @@ class MpiBackend(CpuBackend):
         Two floats per rank decide; a re-cut gathers each rank's owned centres and costs
         (four floats per body, not the whole state) and bisects them on every rank alike;
         the migration that follows moves the bodies to their new owners. Returns whether
-        it cut."""
+        it cut. ``had``: the share of its cores the rank had over the steps (its CPU
+        seconds over the wall's, per thread): the fit counts the step kernels' seconds at
+        that share, so that a rank slowed by another job on its core does not teach the
+        fit that its kind of work is dear."""
         if self.fixed_boxes is not None or steps == 0:
             return False
         from mpi4py import MPI
@@ -722,19 +733,21 @@ class MpiBackend(CpuBackend):
         comm, P, me = self.comm, self.ranks, self.rank
         elements, touching = self._owned_parts()
         n_own = self.local.n_owned
-        mine = np.array([elements.sum(), touching.sum(), work / steps, n_own])
-        every = np.empty((P, 4))
+        mine = np.array([elements.sum(), touching.sum(), work / steps, n_own,
+                         min(max(had, 0.05), 1.0)])
+        every = np.empty((P, 5))
         comm.Allgather([mine, MPI.DOUBLE], [every, MPI.DOUBLE])
         if self.weight == "fit" and steps >= self.FIT_MIN_STEPS:
             # (every rank fits the same gathered figures alike: the same weight)
             self._fit_samples = (self._fit_samples + [
-                (every[:, 0].copy(), every[:, 1].copy(), every[:, 2].copy(), float(steps))
+                (every[:, 0].copy(), every[:, 1].copy(), every[:, 2] * every[:, 4],
+                 float(steps))
             ])[-self.FIT_INTERVALS:]
             self.touching_weight = dec.fit_touching_weight(self._fit_samples,
                                                            self.TOUCHING_WEIGHT)
         tw = self.touching_weight
         weight = elements + tw * touching
-        every = np.column_stack([every[:, 0] + tw * every[:, 1], every[:, 2:]])
+        every = np.column_stack([every[:, 0] + tw * every[:, 1], every[:, 2:4]])
         due = dec.imbalance(every[:, 0]) > self.rebalance
         if self.weight == "time":
             due = dec.imbalance(every[:, 1]) > self.rebalance

@@ -96,12 +96,20 @@ def imbalance(costs: np.ndarray) -> float:
     return float(costs.max() / mean) if mean > 0 else 1.0
 
 
-#: the touching weights a fit chooses among (per touching side, in elements)
-FIT_GRID = np.geomspace(0.05, 20.0, 121)
+#: the touching weights a fit chooses among (per touching side, in elements): contact
+#: laws measured here cost 0.17-0.55 of an element's share of the step
+#: (``benchmarks/mpi_scaling.py``); 2 leaves room for dearer laws and bounds what a
+#: misleading time can do to the cut
+FIT_GRID = np.geomspace(0.05, 2.0, 97)
+#: the fewest intervals a fit needs, and the share of the prior's residual the fitted
+#: weight must leave at most (below these the prior stays: noise moves no cut)
+FIT_MIN_INTERVALS = 4
+FIT_MIN_GAIN = 0.5
 
 
 def fit_touching_weight(samples: list[tuple[np.ndarray, np.ndarray, np.ndarray, float]],
-                        prior: float) -> float:
+                        prior: float, min_intervals: int = FIT_MIN_INTERVALS,
+                        min_gain: float = FIT_MIN_GAIN) -> float:
     """The weight x of a touching contact side, in elements, that makes the ranks' modelled
     costs ``E_r + x T_r`` proportional to their measured seconds per step ``w_r``.
 
@@ -110,12 +118,16 @@ def fit_touching_weight(samples: list[tuple[np.ndarray, np.ndarray, np.ndarray, 
     steps as its weight. Each interval gets its own scale (the machine's speed drifts;
     only the ranks' ratios within an interval inform x): the residual of ``w`` against
     ``s (E + x T)`` with the best ``s``, relative to ``|w|``, summed over the intervals,
-    is least at the chosen x (a grid, :data:`FIT_GRID`). Where the data do not tell the
-    weights apart (ranks of alike composition: then x does not matter for the balance),
-    the grid point nearest ``prior`` wins.
+    is least at the chosen x (a grid, :data:`FIT_GRID`). The prior stays where the data
+    do not decide: fewer than ``min_intervals`` intervals, a best residual above
+    ``min_gain`` of the prior's (scatter that the ranks' compositions do not explain:
+    with two ranks each interval alone fits some x exactly, only agreement across
+    intervals tells), or a flat residual (ranks of alike composition: then x does not
+    matter for the balance; the grid point nearest ``prior`` wins).
     """
-    x = FIT_GRID
+    x = np.append(FIT_GRID, prior)  # (the last: the prior itself)
     total = np.zeros(len(x))
+    used = 0
     for e, t, w, steps in samples:
         m = e[None, :] + x[:, None] * t[None, :]  # (grid, ranks)
         ww = float(w @ w)
@@ -124,7 +136,9 @@ def fit_touching_weight(samples: list[tuple[np.ndarray, np.ndarray, np.ndarray, 
             continue
         r = w[None, :] - ((m @ w) / mm)[:, None] * m  # residual at the best scale
         total += steps * np.einsum("gr,gr->g", r, r) / ww
-    if not np.any(total > 0):
+        used += 1
+    at_prior, total, x = total[-1], total[:-1], x[:-1]
+    if used < min_intervals or not np.any(total > 0) or total.min() > min_gain * at_prior:
         return float(prior)
     # (a flat residual: ties within a part in 1e-6 go to the grid point nearest the prior)
     near = total <= total.min() * (1 + 1e-6) + 1e-300
