@@ -20,9 +20,9 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   their seconds per step) differ by more than ``rebalance`` (:meth:`_recut_in_call`).
   With ``weight="fit"`` the weight of a touching contact in the model is fitted
   at each list rebuild to the ranks' measured seconds per step
-  (:func:`dpm.parallel.decomposition.fit_touching_weight`; the default), so that the model
-  follows what contacts cost in this scene on this machine; ``weight="cost"`` keeps it
-  fixed.
+  (:func:`dpm.parallel.decomposition.fit_touching_weight`; opt-in), so that the model
+  follows what contacts cost in this scene on this machine; ``weight="cost"``, the
+  default, keeps it fixed.
 - **Ownership and ghosts**: a rank owns the bodies whose centre lies in its box and holds
   as ghosts every body of another rank with a listed contact partner among its own
   elements (at a call's start), or within 2 r_max + skin (+ the body's own extent) of its
@@ -108,7 +108,7 @@ class MpiBackend(CpuBackend):
     name = "mpi"
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
-                 rebalance: float = 1.1, boxes: Any = None, weight: str = "fit",
+                 rebalance: float = 1.1, boxes: Any = None, weight: str = "cost",
                  comm: Any = None, loop: str = "auto") -> None:
         super().__init__(threads=threads, force_pass=force_pass)
         if loop not in ("auto", "compiled", "python"):
