@@ -185,7 +185,8 @@ def plot(result: dict, path: Path) -> None:
     axs[0].set_xlabel("spheres (box_settle)")
     axs[0].set_ylabel("particle-steps per second")
     axs[0].set_title("strong scaling on this machine, same sitting")
-    axs[0].legend(fontsize=8)
+    axs[0].set_ylim(0, 1.4 * axs[0].get_ylim()[1])  # (room for the legend above the bars)
+    axs[0].legend(fontsize=8, ncol=2, loc="upper left")
     parts = ["compute_share", "wait_share", "halo_share", "migrate_share",
              "gather_scatter_share"]
     bottom = [0.0] * len(sizes)
