@@ -19,6 +19,13 @@ rate(1)). Writes benchmarks/results/mpi_scaling.json and .png.
     python benchmarks/mpi_scaling.py                 # 1e4 and 1e5 spheres, 2000 steps
     python benchmarks/mpi_scaling.py --sizes 10000 --steps 1000      # quicker
     python benchmarks/mpi_scaling.py --oversubscribe 4               # + a 4-rank run
+    python benchmarks/mpi_scaling.py --rounds 3     # each configuration 3 times in turn
+
+With ``--rounds`` every ratio (efficiency, against threads, against LIGGGHTS) is the
+median of the rounds' ratios, each round's runs one after another, and the plot shows
+the median rates; the splits are the last round's. On a shared or virtual machine one
+sitting's ratio can swing by 0.3 (the same code gave two threads 0.63 and 0.98 of twice
+one thread in two sittings here): quote medians of rounds there.
 
 Machines with more cores: ``--ranks 1 2 4 8``. A run on more ranks than cores
 (``--oversubscribe``) is a correctness run only: its time means nothing.
@@ -32,6 +39,7 @@ import os
 import platform
 import re
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -141,6 +149,29 @@ def run_liggghts(lat, steps: int, ranks: int, tmp: Path):
             "mean_z_m": float(zs[-1][3]) if zs else None}
 
 
+#: each ratio of a row: (numerator, denominator, factor); with several rounds, the median
+#: of the rounds' ratios (each round's runs follow one another: a slower spell of a shared
+#: machine falls on both sides of a ratio more often than across rounds)
+RATIOS = {"efficiency_2_ranks": ("dpm_2_ranks", "dpm_1", 2.0),
+          "efficiency_2_threads": ("dpm_2_threads", "dpm_1", 2.0),
+          "dpm_2_ranks_over_2_threads": ("dpm_2_ranks", "dpm_2_threads", 1.0),
+          "liggghts_efficiency_2_ranks": ("liggghts_2", "liggghts_1", 2.0),
+          "ratio_2_ranks_to_liggghts_2_ranks": ("dpm_2_ranks", "liggghts_2", 1.0),
+          "ratio_1_to_liggghts_1": ("dpm_1", "liggghts_1", 1.0)}
+
+
+def ratios(rounds: list[dict]) -> dict:
+    """The row's ratios (:data:`RATIOS`): the median over the rounds, and every round's."""
+    out = {}
+    for name, (num, den, f) in RATIOS.items():
+        per = [r[num] / (f * r[den]) for r in rounds if num in r and den in r]
+        if per:
+            out[name] = float(statistics.median(per))
+            if len(per) > 1:
+                out[name + "_rounds"] = per
+    return out
+
+
 def shares(res: dict) -> dict:
     """Mean over ranks of each part of the timed run, as fractions of its wall time."""
     rows = res["ranks"]
@@ -176,10 +207,11 @@ def plot(result: dict, path: Path) -> None:
     for k, (key, lab) in enumerate(zip(keys, labels, strict=True)):
         xs, ys = [], []
         for i, s in enumerate(sizes):
+            per = [r[key] for r in s.get("rounds", []) if key in r]  # (median of rounds)
             r = s.get(key)
             if r:
                 xs.append(i + (k - 2) * width)
-                ys.append(r["particle_steps_per_s"])
+                ys.append(statistics.median(per) if per else r["particle_steps_per_s"])
         axs[0].bar(xs, ys, width, label=lab)
     axs[0].set_xticks(range(len(sizes)), [f"{s['particles']:,}" for s in sizes])
     axs[0].set_xlabel("spheres (box_settle)")
@@ -212,6 +244,9 @@ def main() -> None:
                     help="also a correctness run on R ranks (more than the cores)")
     ap.add_argument("--no-liggghts", action="store_true")
     ap.add_argument("--tag", default="mpi_scaling")
+    ap.add_argument("--rounds", type=int, default=1,
+                    help="run every configuration this many times in turn; each ratio is "
+                    "the median of the rounds' (the records kept are the last round's)")
     a = ap.parse_args()
     if a.worker:
         lat = tuple(int(x) for x in a.worker[:3])
@@ -223,27 +258,20 @@ def main() -> None:
         for size in a.sizes:
             lat = LATTICES[size]
             steps = a.steps
-            row = {"particles": lat[0] * lat[1] * lat[2], "lattice": lat, "steps": steps}
-            row["dpm_1"] = run_dpm(lat, steps, 1, 1, tmp)
-            row["dpm_2_threads"] = run_dpm(lat, steps, 1, 2, tmp)
-            row["dpm_2_ranks"] = run_dpm(lat, steps, 2, 1, tmp)
-            if not a.no_liggghts:
-                row["liggghts_1"] = run_liggghts(lat, steps, 1, tmp / f"{size}")
-                row["liggghts_2"] = run_liggghts(lat, steps, 2, tmp / f"{size}")
-            base = row["dpm_1"]["particle_steps_per_s"]
-            row["efficiency_2_ranks"] = row["dpm_2_ranks"]["particle_steps_per_s"] / (2 * base)
-            row["efficiency_2_threads"] = (row["dpm_2_threads"]["particle_steps_per_s"]
-                                           / (2 * base))
-            row["dpm_2_ranks_over_2_threads"] = (row["dpm_2_ranks"]["particle_steps_per_s"]
-                                                 / row["dpm_2_threads"]["particle_steps_per_s"])
+            row = {"particles": lat[0] * lat[1] * lat[2], "lattice": lat, "steps": steps,
+                   "rounds": []}
+            for k in range(a.rounds):  # (the configurations in turn, round after round)
+                got = {"dpm_1": run_dpm(lat, steps, 1, 1, tmp),
+                       "dpm_2_threads": run_dpm(lat, steps, 1, 2, tmp),
+                       "dpm_2_ranks": run_dpm(lat, steps, 2, 1, tmp)}
+                if not a.no_liggghts:
+                    got["liggghts_1"] = run_liggghts(lat, steps, 1, tmp / f"{size}_{k}")
+                    got["liggghts_2"] = run_liggghts(lat, steps, 2, tmp / f"{size}_{k}")
+                row.update(got)  # (the last round's records, with their splits)
+                row["rounds"].append({name: r["particle_steps_per_s"]
+                                      for name, r in got.items() if r})
+            row.update(ratios(row["rounds"]))
             row["dpm_2_ranks_shares"] = shares(row["dpm_2_ranks"])
-            if row.get("liggghts_2"):
-                lg1 = row["liggghts_1"]["particle_steps_per_s"]
-                lg2 = row["liggghts_2"]["particle_steps_per_s"]
-                row["liggghts_efficiency_2_ranks"] = lg2 / (2 * lg1)
-                row["ratio_2_ranks_to_liggghts_2_ranks"] = (
-                    row["dpm_2_ranks"]["particle_steps_per_s"] / lg2)
-                row["ratio_1_to_liggghts_1"] = base / lg1
             strong.append(row)
             (tmp / "x").mkdir(exist_ok=True)
             print(json.dumps({k: v for k, v in row.items() if not isinstance(v, dict)}),
