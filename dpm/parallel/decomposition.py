@@ -98,8 +98,9 @@ def imbalance(costs: np.ndarray) -> float:
 
 #: the touching weights a fit chooses among (per touching side, in elements): contact
 #: laws measured here cost 0.17-0.55 of an element's share of the step
-#: (``benchmarks/mpi_scaling.py``); 2 leaves room for dearer laws and bounds what a
-#: misleading time can do to the cut
+#: (``benchmarks/mpi_cost_model.py``: 0.55; fits in ``benchmarks/mpi_scaling.py``
+#: runs: 0.17-0.55); 2 leaves room for dearer laws and bounds what a misleading time
+#: can do to the cut
 FIT_GRID = np.geomspace(0.05, 2.0, 97)
 #: the fewest intervals a fit needs, and the share of the prior's residual the fitted
 #: weight must leave at most (below these the prior stays: noise moves no cut)
