@@ -70,3 +70,50 @@ def test_fit_keeps_the_prior_against_scatter_the_compositions_do_not_explain():
     assert abs(np.log(free / 0.5)) > np.log(1.2), free
     # too few intervals decide nothing either
     assert dec.fit_touching_weight(samples[:3], prior=0.5, min_gain=np.inf) == 0.5
+
+
+def test_one_pass_owner_and_ghost_ranks_match_the_box_geometry():
+    """The compiled owner and ghost-layer test that a migration asks at every rebuild
+    gives the rank boxes' answers (numpy's form of each), periodic images included."""
+    from dpm.kernels.domain import owner_and_near
+
+    rng = np.random.default_rng(3)
+    p = rng.uniform(-1.0, 1.0, (5000, 3))
+    boxes = dec.bisect(p, np.ones(len(p)), 3, cell=0.01)
+    reach = rng.uniform(0.0, 0.3, len(p))
+    for period in (None, np.array([-1.0, -1.0, -1.0, 2.0, 0.0, 2.0])):
+        owner, near = owner_and_near(p, boxes, period, reach)
+        want = dec.owner_of(p, boxes)
+        assert np.array_equal(owner, want)
+        for k in range(3):
+            ref = (dec.distance_to_box(p, boxes[k], period) <= reach) & (want != k)
+            assert np.array_equal(near[k], ref)
+        assert near.any() and not near[owner, np.arange(len(p))].any()
+
+
+def test_pool_rows_read_across_head_and_tail_without_joining_them():
+    """A migration's pool reads a rank's own rows (the head) and the rows it received
+    (the tail) as one numbering; rows kept in place are copied as a block."""
+    from dpm.parallel.local import arange_prefix, element_rows, take_two
+
+    rng = np.random.default_rng(4)
+    for _ in range(500):
+        nh, nt = rng.integers(0, 7), rng.integers(0, 4)
+        shape = (nh,) + ((rng.integers(1, 4),) if rng.random() < 0.7 else ())
+        head = rng.random(shape)
+        tail = rng.random((nt,) + shape[1:]) if nt else None
+        whole = np.concatenate([head, tail]) if nt else head
+        if len(whole) == 0:
+            continue
+        rows = np.r_[np.arange(rng.integers(0, len(whole) + 1)),
+                     rng.integers(0, len(whole), rng.integers(0, 6))].astype(np.int64)
+        assert np.array_equal(take_two(head, tail, rows, arange_prefix(rows)), whole[rows])
+    assert arange_prefix(np.array([0, 1, 2, 5, 3])) == 3
+    assert arange_prefix(np.array([1, 0])) == 0
+    # one element a body: element rows are the body rows; else each body's run
+    est = np.arange(6)
+    er, counts = element_rows(est, np.array([4, 1]))
+    assert er.tolist() == [4, 1] and counts.tolist() == [1, 1]
+    est = np.array([0, 1, 3, 3, 5, 6])  # (body 2 has no element: not the one-a-body case)
+    er, counts = element_rows(est, np.array([4, 1, 2]))
+    assert er.tolist() == [5, 1, 2] and counts.tolist() == [1, 2, 0]

@@ -76,6 +76,7 @@ import numpy as np
 from ..backends.base import STATUS_NAN, STATUS_OK, STATUS_OVERLAP, StepResult
 from ..backends.cpu import CpuBackend
 from ..errors import ParameterError
+from ..kernels.domain import owner_and_near
 from ..kernels.halo import HALO_WIDTH, pack_halo, unpack_halo
 from ..kernels.mpi_calls import HALO_TAG
 from . import decomposition as dec
@@ -573,17 +574,13 @@ class MpiBackend(CpuBackend):
         weight, pairs = self._cost()
         eb_i, eb_j = e.owner[pairs.i], e.owner[pairs.j]
         self._cut(b.position, weight)
-        owner = dec.owner_of(b.position, self.boxes)
-        # ghosts of rank k: every body with a listed partner owned by k, and every body
-        # within the ghost layer of k's box
-        P = self.ranks
-        ghost_on = np.zeros((P, nb), bool)
+        # ghosts of rank k: every body within the ghost layer of k's box, and every body
+        # with a listed partner owned by k
+        reach = self._layer() + self._body_extent(b.element_start, e.offset, e.radius)
+        owner, ghost_on = owner_and_near(b.position, self.boxes, sim.period, reach)
         cross = owner[eb_i] != owner[eb_j]
         ghost_on[owner[eb_i[cross]], eb_j[cross]] = True
         ghost_on[owner[eb_j[cross]], eb_i[cross]] = True
-        reach = self._layer() + self._body_extent(b.element_start, e.offset, e.radius)
-        for k in range(P):
-            ghost_on[k] |= dec.distance_to_box(b.position, self.boxes[k], sim.period) <= reach
         ghost_on[owner, np.arange(nb)] = False
         pool = Pool.of(b, e, self.aux, self.vf, self.wf, c, wc)
         self._place(pool, owner, ghost_on, b.id)
@@ -779,14 +776,10 @@ class MpiBackend(CpuBackend):
         b, e = loc.bodies, loc.elements
         n_own = loc.n_owned
         pos = b.position[:n_own]
-        new_owner = dec.owner_of(pos, self.boxes)
         est = b.element_start
         reach = self._layer() + self._body_extent(est[:n_own + 1], e.offset[:est[n_own]],
                                                   e.radius[:est[n_own]])
-        near = np.zeros((P, n_own), bool)
-        for k in range(P):
-            near[k] = dec.distance_to_box(pos, self.boxes[k], self.sim.period) <= reach
-        near[new_owner, np.arange(n_own)] = False
+        new_owner, near = owner_and_near(pos, self.boxes, self.sim.period, reach)
         # touching entries only: the lists are rebuilt right after, and an entry that does
         # not touch has no history to carry (it was cleared when the pair parted)
         pool = Pool.of(b, e, inner.aux, inner.vf, inner.wf, loc.contacts, loc.wall_contacts,
@@ -843,7 +836,7 @@ class MpiBackend(CpuBackend):
                 extra.append(part)
                 have[part["bodies"]["id"]] = True
         pool.extend(extra)
-        pids = pool.bodies["id"]
+        pids = pool.ids()
         n_pool = len(pids)
         row_of = np.full(top, -1, np.int64)
         row_of[pids] = np.arange(n_pool)

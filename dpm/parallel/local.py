@@ -36,9 +36,38 @@ def keep(a: np.ndarray, mask: np.ndarray) -> np.ndarray:
     return np.compress(mask, a, axis=0)
 
 
+def arange_prefix(rows: np.ndarray) -> int:
+    """How many of ``rows`` run 0, 1, 2, ... from the start (rows kept in place)."""
+    n = len(rows)
+    off = np.flatnonzero(rows != np.arange(n))
+    return int(off[0]) if len(off) else n
+
+
+def take_two(head: np.ndarray, tail: np.ndarray | None, rows: np.ndarray,
+             prefix: int = 0) -> np.ndarray:
+    """Rows ``rows`` of ``head`` followed by ``tail`` (as if concatenated; None: no
+    tail), the first ``prefix`` of which are rows 0, 1, ... of ``head`` (copied as one
+    block: 2-4x faster than gathering them)."""
+    prefix = min(prefix, len(head))  # (the run may go on into the tail)
+    out = np.empty((len(rows),) + head.shape[1:], head.dtype)
+    out[:prefix] = head[:prefix]
+    rest, o = rows[prefix:], out[prefix:]
+    if len(head) == 0:
+        return np.take(tail, rows, axis=0) if len(rows) else out
+    # ("clip": unbuffered; a tail row reads the head's last row, then its own below)
+    np.take(head, rest, axis=0, out=o, mode="clip")
+    if tail is not None and len(tail):
+        at = np.flatnonzero(rest >= len(head))
+        o[at] = np.take(tail, rest[at] - len(head), axis=0)
+    return out
+
+
 def element_rows(estart: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(element indices of body ``rows`` in that order, elements per row)."""
     rows = np.asarray(rows, np.int64)
+    if int(estart[-1]) == len(estart) - 1 and np.all(np.diff(estart) == 1):
+        # (one element a body: element k of body k)
+        return rows, np.ones(len(rows), np.int64)
     counts = estart[rows + 1] - estart[rows]
     if len(rows) == 0:
         return np.zeros(0, np.int64), counts
@@ -133,7 +162,11 @@ def set_entries(lst: Any, n_rows: int, e: Entries, unique: bool = False) -> None
 class Pool:
     """Body rows to choose from: body arrays (``Bodies.ARRAYS`` and ``element_start``),
     element arrays, the integrator's rows and the velocities the forces see, and the
-    contact entries among them (element indices of the pool)."""
+    contact entries among them (element indices of the pool).
+
+    The arrays are the *head* (a rank's own rows, as views: nothing copied); rows
+    received at a migration are the *tail* (:meth:`extend`), numbered after the head's
+    and read together with them by :meth:`take` without concatenating the two."""
 
     bodies: dict
     estart: np.ndarray
@@ -143,6 +176,10 @@ class Pool:
     wf: np.ndarray
     pairs: Entries
     walls: Entries
+    #: the rows appended by :meth:`extend`, laid out as a payload of
+    #: :meth:`rows_payload` (``bodies``, ``elements``, ``counts``, ``aux``, ``vf``,
+    #: ``wf``); None: none
+    tail: dict | None = None
 
     ELEMENT_FIELDS = ("offset", "radius", "material", "position", "reference")
 
@@ -155,7 +192,23 @@ class Pool:
                    Entries.of(contacts, active_only), Entries.of(wall_contacts, active_only))
 
     def __len__(self) -> int:
-        return len(self.bodies["id"])
+        return len(self.bodies["id"]) + (len(self.tail["bodies"]["id"]) if self.tail else 0)
+
+    def ids(self) -> np.ndarray:
+        """Every row's body id, head then tail."""
+        ids = self.bodies["id"]
+        return np.concatenate([ids, self.tail["bodies"]["id"]]) if self.tail else ids
+
+    def take(self, section: str, name: str, rows: np.ndarray, prefix: int = 0
+             ) -> np.ndarray:
+        """Rows ``rows`` (body rows, or element rows for ``section`` "elements") of one
+        array, head and tail together; ``prefix``: as :func:`take_two`."""
+        if section in ("bodies", "elements"):
+            head = getattr(self, section)[name]
+            tail = self.tail[section][name] if self.tail else None
+        else:
+            head, tail = getattr(self, section), (self.tail[section] if self.tail else None)
+        return take_two(head, tail, rows, prefix)
 
     def rows_payload(self, rows: np.ndarray) -> dict:
         """The arrays of body ``rows`` (to send to another rank)."""
@@ -167,19 +220,24 @@ class Pool:
                 "wf": take(self.wf, rows)}
 
     def extend(self, payloads: list[dict]) -> None:
-        """Append the body rows of ``payloads`` (no contact entries)."""
+        """Append the body rows of ``payloads`` (no contact entries) to the tail (the
+        head's arrays are not copied)."""
         payloads = [p for p in payloads if p is not None and len(p["counts"])]
         if not payloads:
             return
-        self.bodies = {k: np.concatenate([v] + [p["bodies"][k] for p in payloads])
-                       for k, v in self.bodies.items()}
-        counts = np.concatenate([np.diff(self.estart)] + [p["counts"] for p in payloads])
+        if self.tail:
+            payloads = [self.tail] + payloads
+        self.tail = {
+            "bodies": {k: np.concatenate([p["bodies"][k] for p in payloads])
+                       for k in self.bodies},
+            "elements": {k: np.concatenate([p["elements"][k] for p in payloads])
+                         for k in self.elements},
+            "counts": np.concatenate([p["counts"] for p in payloads]),
+            **{name: np.concatenate([p[name] for p in payloads])
+               for name in ("aux", "vf", "wf")}}
+        n_head = len(self.bodies["id"])
+        counts = np.concatenate([np.diff(self.estart[:n_head + 1]), self.tail["counts"]])
         self.estart = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        self.elements = {k: np.concatenate([v] + [p["elements"][k] for p in payloads])
-                         for k, v in self.elements.items()}
-        for name in ("aux", "vf", "wf"):
-            setattr(self, name, np.concatenate([getattr(self, name)]
-                                               + [p[name] for p in payloads]))
 
 
 class LocalScene:
@@ -210,17 +268,20 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
     """Fill ``scene`` with pool rows ``owned`` then ``ghosts`` (in those orders) and the
     pool's contact entries among their elements. Returns (aux, vf, wf) of the new rows."""
     rows = np.concatenate([owned, ghosts]).astype(np.int64)
+    # (rows kept in place, as a rank's owned rows between migrations: copied as a block)
+    first = arange_prefix(rows)
     b = scene.bodies
-    for k, v in pool.bodies.items():
-        setattr(b, k, take(v, rows))
+    for k in pool.bodies:
+        setattr(b, k, pool.take("bodies", k, rows, first))
     er, counts = element_rows(pool.estart, rows)
     b.element_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     b.ghosts = int(len(ghosts))
     e = scene.elements
     e.owner = np.repeat(np.arange(len(rows)), counts).astype(np.int64)
-    for k, v in pool.elements.items():
-        setattr(e, k, take(v, er))
-    new_el = np.full(len(pool.elements["radius"]), -1, np.int64)
+    e_first = arange_prefix(er)
+    for k in pool.elements:
+        setattr(e, k, pool.take("elements", k, er, e_first))
+    new_el = np.full(int(pool.estart[-1]), -1, np.int64)
     new_el[er] = np.arange(len(er))
     # a ghost's entries among ghosts and with boundaries are its owner's work: an entry is
     # kept where an element of it is owned here (as the rank's list rebuilds keep them)
@@ -238,4 +299,5 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
     set_entries(scene.wall_contacts, len(er),
                 Entries(new_el[we.i], we.j, we.hist, we.act), unique=True)
     scene.n_owned = int(len(owned))
-    return take(pool.aux, rows), take(pool.vf, rows), take(pool.wf, rows)
+    return (pool.take("aux", "", rows, first), pool.take("vf", "", rows, first),
+            pool.take("wf", "", rows, first))
