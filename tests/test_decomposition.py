@@ -93,8 +93,8 @@ def test_one_pass_owner_and_ghost_ranks_match_the_box_geometry():
 
 def test_pool_rows_read_across_head_and_tail_without_joining_them():
     """A migration's pool reads a rank's own rows (the head) and the rows it received
-    (the tail) as one numbering; rows kept in place are copied as a block."""
-    from dpm.parallel.local import arange_prefix, element_rows, take_two
+    (the tail) as one numbering; runs of rows kept in place are copied as blocks."""
+    from dpm.parallel.local import element_rows, take_two
 
     rng = np.random.default_rng(4)
     for _ in range(500):
@@ -106,10 +106,12 @@ def test_pool_rows_read_across_head_and_tail_without_joining_them():
         if len(whole) == 0:
             continue
         rows = np.r_[np.arange(rng.integers(0, len(whole) + 1)),
-                     rng.integers(0, len(whole), rng.integers(0, 6))].astype(np.int64)
-        assert np.array_equal(take_two(head, tail, rows, arange_prefix(rows)), whole[rows])
-    assert arange_prefix(np.array([0, 1, 2, 5, 3])) == 3
-    assert arange_prefix(np.array([1, 0])) == 0
+                     rng.integers(0, len(whole), rng.integers(0, 6)),
+                     np.arange(rng.integers(0, len(whole) + 1))].astype(np.int64)
+        assert np.array_equal(take_two(head, tail, rows), whole[rows])
+    ids = np.arange(12).reshape(4, 3)  # (int rows, a run crossing from head to tail)
+    assert take_two(ids[:2], ids[2:], np.array([1, 2, 3, 0])).tolist() == \
+        ids[[1, 2, 3, 0]].tolist()
     # one element a body: element rows are the body rows; else each body's run
     est = np.arange(6)
     er, counts = element_rows(est, np.array([4, 1]))

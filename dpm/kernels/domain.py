@@ -71,3 +71,22 @@ def owner_and_near(points: np.ndarray, boxes: np.ndarray, period: np.ndarray | N
                     np.ascontiguousarray(np.broadcast_to(reach, (n,)), np.float64),
                     owner, near)
     return owner, near
+
+
+@jit
+def copy_runs(head, tail, width, starts, sources, lengths, out):
+    """Rows ``out[starts[m] : starts[m] + lengths[m]]`` take the consecutive rows from
+    ``sources[m]`` on of ``[head; tail]``, each run copied as one flat block (a vector
+    copy). The arrays are flat (rows of ``width`` values one after another); a run lies
+    in the head or in the tail."""
+    nh = head.shape[0] // width if width else 0
+    for m in range(starts.shape[0]):
+        d = starts[m] * width
+        r = sources[m]
+        size = lengths[m] * width
+        if r < nh:
+            s = r * width
+            out[d:d + size] = head[s:s + size]
+        else:
+            s = (r - nh) * width
+            out[d:d + size] = tail[s:s + size]

@@ -25,6 +25,24 @@ import numpy as np
 from ..state import Bodies, Contacts, Elements, WallContacts
 
 
+class Scratch:
+    """Arrays kept from one call to the next, grown as needed (a gather's buffers, a
+    rank's state between migrations: fresh ones of tens of MB each time would fault their
+    pages in again, ~1.5 us a 4 kB page, since dpm returns freed blocks over 1 MB to the
+    system: :mod:`dpm._memory`)."""
+
+    def __init__(self) -> None:
+        self.arrays: dict[str, np.ndarray] = {}
+
+    def get(self, name: str, shape: tuple, dtype: Any = np.float64) -> np.ndarray:
+        """An uninitialised C-contiguous array ``name`` of ``shape``."""
+        n = int(np.prod(shape))
+        a = self.arrays.get(name)
+        if a is None or a.size < n or a.dtype != dtype:
+            a = self.arrays[name] = np.empty(n + n // 4 + 16, dtype)
+        return a[:n].reshape(shape)
+
+
 def take(a: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """Rows ``rows`` of ``a`` (``np.take`` along the first axis: 3-5x faster than ``a[rows]``
     for 2-D arrays, which numpy indexes through its general path)."""
@@ -36,29 +54,40 @@ def keep(a: np.ndarray, mask: np.ndarray) -> np.ndarray:
     return np.compress(mask, a, axis=0)
 
 
-def arange_prefix(rows: np.ndarray) -> int:
-    """How many of ``rows`` run 0, 1, 2, ... from the start (rows kept in place)."""
-    n = len(rows)
-    off = np.flatnonzero(rows != np.arange(n))
-    return int(off[0]) if len(off) else n
+def runs_of(rows: np.ndarray, n_head: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``rows`` as runs of consecutive rows, none crossing from the head's ``n_head`` rows
+    into the tail: (where each run starts in ``rows``, its first row, its length)."""
+    rows = np.asarray(rows, np.int64)
+    if len(rows) == 0:
+        z = np.zeros(0, np.int64)
+        return z, z, z
+    brk = (np.diff(rows) != 1) | (rows[1:] == n_head)
+    starts = np.concatenate([[0], np.flatnonzero(brk) + 1]).astype(np.int64)
+    lengths = np.diff(np.append(starts, len(rows))).astype(np.int64)
+    return starts, rows[starts], lengths
 
 
 def take_two(head: np.ndarray, tail: np.ndarray | None, rows: np.ndarray,
-             prefix: int = 0) -> np.ndarray:
+             runs: tuple | None = None, out: np.ndarray | None = None) -> np.ndarray:
     """Rows ``rows`` of ``head`` followed by ``tail`` (as if concatenated; None: no
-    tail), the first ``prefix`` of which are rows 0, 1, ... of ``head`` (copied as one
-    block: 2-4x faster than gathering them)."""
-    prefix = min(prefix, len(head))  # (the run may go on into the tail)
-    out = np.empty((len(rows),) + head.shape[1:], head.dtype)
-    out[:prefix] = head[:prefix]
-    rest, o = rows[prefix:], out[prefix:]
-    if len(head) == 0:
-        return np.take(tail, rows, axis=0) if len(rows) else out
-    # ("clip": unbuffered; a tail row reads the head's last row, then its own below)
-    np.take(head, rest, axis=0, out=o, mode="clip")
-    if tail is not None and len(tail):
-        at = np.flatnonzero(rest >= len(head))
-        o[at] = np.take(tail, rest[at] - len(head), axis=0)
+    tail), without joining the two; each run of consecutive rows (a rank's rows kept in
+    place) copied as a block (:func:`dpm.kernels.domain.copy_runs`); ``runs``:
+    :func:`runs_of` of ``rows``, when several arrays take the same rows; ``out``: a
+    C-contiguous array to fill (of the rows' shape and the head's dtype), not one of the
+    two."""
+    from ..kernels.domain import copy_runs
+
+    if out is None:
+        out = np.empty((len(rows),) + head.shape[1:], head.dtype)
+    if len(rows) == 0:
+        return out
+    if tail is None:
+        tail = head[:0]
+    if runs is None:
+        runs = runs_of(rows, len(head))
+    w = int(np.prod(head.shape[1:], dtype=np.int64))
+    copy_runs(np.ascontiguousarray(head).reshape(-1), np.ascontiguousarray(tail).reshape(-1),
+              w, *runs, out.reshape(-1))
     return out
 
 
@@ -199,16 +228,20 @@ class Pool:
         ids = self.bodies["id"]
         return np.concatenate([ids, self.tail["bodies"]["id"]]) if self.tail else ids
 
-    def take(self, section: str, name: str, rows: np.ndarray, prefix: int = 0
-             ) -> np.ndarray:
+    def take(self, section: str, name: str, rows: np.ndarray, runs: tuple | None = None,
+             into: Scratch | None = None) -> np.ndarray:
         """Rows ``rows`` (body rows, or element rows for ``section`` "elements") of one
-        array, head and tail together; ``prefix``: as :func:`take_two`."""
+        array, head and tail together (``runs``: as :func:`take_two`); ``into``: in an
+        array of that scratch (named by the section and array), not a fresh one."""
         if section in ("bodies", "elements"):
             head = getattr(self, section)[name]
             tail = self.tail[section][name] if self.tail else None
         else:
             head, tail = getattr(self, section), (self.tail[section] if self.tail else None)
-        return take_two(head, tail, rows, prefix)
+        out = None
+        if into is not None:
+            out = into.get(f"{section}.{name}", (len(rows),) + head.shape[1:], head.dtype)
+        return take_two(head, tail, rows, runs, out)
 
     def rows_payload(self, rows: np.ndarray) -> dict:
         """The arrays of body ``rows`` (to send to another rank)."""
@@ -261,6 +294,11 @@ class LocalScene:
         self.rebuild_count = 0
         #: owned bodies (the first rows; the ghosts follow)
         self.n_owned = 0
+        #: two sets of buffers for the state arrays, used in turn by :func:`assemble`
+        #: (the new rows are read from the set in use), so that a migration reuses
+        #: mapped memory
+        self.buffers = (Scratch(), Scratch())
+        self.parity = 0
 
 
 def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarray
@@ -268,19 +306,21 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
     """Fill ``scene`` with pool rows ``owned`` then ``ghosts`` (in those orders) and the
     pool's contact entries among their elements. Returns (aux, vf, wf) of the new rows."""
     rows = np.concatenate([owned, ghosts]).astype(np.int64)
-    # (rows kept in place, as a rank's owned rows between migrations: copied as a block)
-    first = arange_prefix(rows)
+    # (into the rank's other set of buffers: the pool may read the current set)
+    scene.parity ^= 1
+    into = scene.buffers[scene.parity]
     b = scene.bodies
+    runs = runs_of(rows, len(pool.bodies["id"]))
     for k in pool.bodies:
-        setattr(b, k, pool.take("bodies", k, rows, first))
+        setattr(b, k, pool.take("bodies", k, rows, runs, into))
     er, counts = element_rows(pool.estart, rows)
     b.element_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     b.ghosts = int(len(ghosts))
     e = scene.elements
     e.owner = np.repeat(np.arange(len(rows)), counts).astype(np.int64)
-    e_first = arange_prefix(er)
+    e_runs = runs_of(er, len(pool.elements["radius"]))
     for k in pool.elements:
-        setattr(e, k, pool.take("elements", k, er, e_first))
+        setattr(e, k, pool.take("elements", k, er, e_runs, into))
     new_el = np.full(int(pool.estart[-1]), -1, np.int64)
     new_el[er] = np.arange(len(er))
     # a ghost's entries among ghosts and with boundaries are its owner's work: an entry is
@@ -299,5 +339,5 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
     set_entries(scene.wall_contacts, len(er),
                 Entries(new_el[we.i], we.j, we.hist, we.act), unique=True)
     scene.n_owned = int(len(owned))
-    return (pool.take("aux", "", rows, first), pool.take("vf", "", rows, first),
-            pool.take("wf", "", rows, first))
+    return (pool.take("aux", "", rows, runs, into), pool.take("vf", "", rows, runs, into),
+            pool.take("wf", "", rows, runs, into))
