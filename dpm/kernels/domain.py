@@ -1,7 +1,8 @@
-"""Which rank owns each body centre and which ranks must hold it as a ghost, in one pass
-over the centres (the MPI backend's question at every list rebuild; the numpy form,
+"""The MPI backend's kernels at a list rebuild: which rank owns each body centre and
+which ranks must hold it as a ghost, in one pass over the centres (the numpy form,
 :func:`dpm.parallel.decomposition.owner_of` and ``distance_to_box``, makes a temporary
-array per rank and axis).
+array per rank and axis); and the copy of the rows a rank keeps into its new state
+arrays, run by run (:func:`dpm.parallel.local.assemble`).
 
 A rank's box is ``boxes[r] = (lo, hi)``: a centre is inside when ``lo <= x < hi`` on every
 axis (lower faces closed, upper open). Its distance from a box is the length of the

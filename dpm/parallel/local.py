@@ -299,6 +299,8 @@ class LocalScene:
         #: mapped memory
         self.buffers = (Scratch(), Scratch())
         self.parity = 0
+        #: the step's per-element scratch (overlaps, contact counts), kept likewise
+        self.step_scratch = Scratch()
 
 
 def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarray
