@@ -620,13 +620,9 @@ class MpiBackend(CpuBackend):
             share_sphere_arrays(loc)
         inner = self.inner
         inner.sim = loc
-        inner.aux, inner.vf, inner.wf = aux, vf, wf  # (in the buffers assemble filled)
-        # (per-element scratch of the step, in mapped memory kept from the last rows)
-        ne = len(loc.elements.radius)
-        inner.e_worst = loc.step_scratch.get("e_worst", (ne,))
-        inner.e_count = loc.step_scratch.get("e_count", (ne,), np.int32)
-        inner.e_worst[:] = 0.0
-        inner.e_count[:] = 0
+        inner.aux = aux
+        inner._scratch()
+        inner.vf, inner.wf = vf, wf
         # the halo plan: owned rows (local index, id order) sent to each rank
         sends = {}
         for k in range(P):

@@ -26,10 +26,9 @@ from ..state import Bodies, Contacts, Elements, WallContacts
 
 
 class Scratch:
-    """Arrays kept from one call to the next, grown as needed (a gather's buffers, a
-    rank's state between migrations: fresh ones of tens of MB each time would fault their
-    pages in again, ~1.5 us a 4 kB page, since dpm returns freed blocks over 1 MB to the
-    system: :mod:`dpm._memory`)."""
+    """Arrays kept from one call to the next, grown as needed (a gather's buffers: fresh
+    ones of tens of MB each call would fault their pages in again, ~1.5 us a 4 kB page,
+    since dpm returns freed blocks over 1 MB to the system: :mod:`dpm._memory`)."""
 
     def __init__(self) -> None:
         self.arrays: dict[str, np.ndarray] = {}
@@ -68,17 +67,14 @@ def runs_of(rows: np.ndarray, n_head: int) -> tuple[np.ndarray, np.ndarray, np.n
 
 
 def take_two(head: np.ndarray, tail: np.ndarray | None, rows: np.ndarray,
-             runs: tuple | None = None, out: np.ndarray | None = None) -> np.ndarray:
+             runs: tuple | None = None) -> np.ndarray:
     """Rows ``rows`` of ``head`` followed by ``tail`` (as if concatenated; None: no
     tail), without joining the two; each run of consecutive rows (a rank's rows kept in
     place) copied as a block (:func:`dpm.kernels.domain.copy_runs`); ``runs``:
-    :func:`runs_of` of ``rows``, when several arrays take the same rows; ``out``: a
-    C-contiguous array to fill (of the rows' shape and the head's dtype), not one of the
-    two."""
+    :func:`runs_of` of ``rows``, when several arrays take the same rows."""
     from ..kernels.domain import copy_runs
 
-    if out is None:
-        out = np.empty((len(rows),) + head.shape[1:], head.dtype)
+    out = np.empty((len(rows),) + head.shape[1:], head.dtype)
     if len(rows) == 0:
         return out
     if tail is None:
@@ -228,20 +224,16 @@ class Pool:
         ids = self.bodies["id"]
         return np.concatenate([ids, self.tail["bodies"]["id"]]) if self.tail else ids
 
-    def take(self, section: str, name: str, rows: np.ndarray, runs: tuple | None = None,
-             into: Scratch | None = None) -> np.ndarray:
+    def take(self, section: str, name: str, rows: np.ndarray, runs: tuple | None = None
+             ) -> np.ndarray:
         """Rows ``rows`` (body rows, or element rows for ``section`` "elements") of one
-        array, head and tail together (``runs``: as :func:`take_two`); ``into``: in an
-        array of that scratch (named by the section and array), not a fresh one."""
+        array, head and tail together, in a fresh array (``runs``: as :func:`take_two`)."""
         if section in ("bodies", "elements"):
             head = getattr(self, section)[name]
             tail = self.tail[section][name] if self.tail else None
         else:
             head, tail = getattr(self, section), (self.tail[section] if self.tail else None)
-        out = None
-        if into is not None:
-            out = into.get(f"{section}.{name}", (len(rows),) + head.shape[1:], head.dtype)
-        return take_two(head, tail, rows, runs, out)
+        return take_two(head, tail, rows, runs)
 
     def rows_payload(self, rows: np.ndarray) -> dict:
         """The arrays of body ``rows`` (to send to another rank)."""
@@ -294,13 +286,6 @@ class LocalScene:
         self.rebuild_count = 0
         #: owned bodies (the first rows; the ghosts follow)
         self.n_owned = 0
-        #: two sets of buffers for the state arrays, used in turn by :func:`assemble`
-        #: (the new rows are read from the set in use), so that a migration reuses
-        #: mapped memory
-        self.buffers = (Scratch(), Scratch())
-        self.parity = 0
-        #: the step's per-element scratch (overlaps, contact counts), kept likewise
-        self.step_scratch = Scratch()
 
 
 def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarray
@@ -308,13 +293,12 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
     """Fill ``scene`` with pool rows ``owned`` then ``ghosts`` (in those orders) and the
     pool's contact entries among their elements. Returns (aux, vf, wf) of the new rows."""
     rows = np.concatenate([owned, ghosts]).astype(np.int64)
-    # (into the rank's other set of buffers: the pool may read the current set)
-    scene.parity ^= 1
-    into = scene.buffers[scene.parity]
+    # (fresh arrays, not buffers kept from the last rows: with buffers reused the step
+    # kernels ran 5-15 % slower on 2 ranks of 1e5 spheres, for a reason not found)
     b = scene.bodies
     runs = runs_of(rows, len(pool.bodies["id"]))
     for k in pool.bodies:
-        setattr(b, k, pool.take("bodies", k, rows, runs, into))
+        setattr(b, k, pool.take("bodies", k, rows, runs))
     er, counts = element_rows(pool.estart, rows)
     b.element_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     b.ghosts = int(len(ghosts))
@@ -322,7 +306,7 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
     e.owner = np.repeat(np.arange(len(rows)), counts).astype(np.int64)
     e_runs = runs_of(er, len(pool.elements["radius"]))
     for k in pool.elements:
-        setattr(e, k, pool.take("elements", k, er, e_runs, into))
+        setattr(e, k, pool.take("elements", k, er, e_runs))
     new_el = np.full(int(pool.estart[-1]), -1, np.int64)
     new_el[er] = np.arange(len(er))
     # a ghost's entries among ghosts and with boundaries are its owner's work: an entry is
@@ -341,5 +325,5 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
     set_entries(scene.wall_contacts, len(er),
                 Entries(new_el[we.i], we.j, we.hist, we.act), unique=True)
     scene.n_owned = int(len(owned))
-    return (pool.take("aux", "", rows, runs, into), pool.take("vf", "", rows, runs, into),
-            pool.take("wf", "", rows, runs, into))
+    return (pool.take("aux", "", rows, runs), pool.take("vf", "", rows, runs),
+            pool.take("wf", "", rows, runs))
