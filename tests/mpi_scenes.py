@@ -6,7 +6,8 @@
 
 Rank 0 writes the end state by body id (position, velocity, angular velocity,
 orientation), the boundary loads, the outlet records and, per call, each rank's owned
-bodies and step time. Every scene but ``sticky`` (JKR) uses Hertz-Mindlin and velocity
+bodies, step time, halo time, and the re-cuts, calls and rebuilds without a migration
+so far. Every scene but ``sticky`` (JKR) uses Hertz-Mindlin and velocity
 Verlet (the step modules the rest of the suite compiles).
 
 Scenes:
@@ -274,11 +275,12 @@ def main(argv: list[str] | None = None) -> int:
 
             rows = MPI.COMM_WORLD.allgather([t.get("owned", len(sim.bodies)),
                                              t.get("steps_s", 0.0), t.get("halo_s", 0.0),
-                                             tot.get("recuts", 0), tot.get("calls", 0)])
+                                             tot.get("recuts", 0), tot.get("calls", 0),
+                                             tot.get("migrations_skipped", 0)])
             per_call.append(rows)
     wall = time.perf_counter() - t0
     res = state(sim)
-    res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 5))
+    res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 6))
     res["wall_s"] = np.array(wall)
     res["loop_used"] = np.array(getattr(sim.backend, "loop_used", ""))
     sim.close()

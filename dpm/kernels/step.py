@@ -1126,6 +1126,21 @@ def ranked_forces(dt, ctl, bodies, elems, pairs, walls, bnd, diag):
     return worst
 
 
+@jit
+def ranked_halo_pack(send_rows, bodies, sbuf):
+    """The halo rows a rank sends (:func:`dpm.kernels.halo.pack_halo`), for a halo that
+    Python sends (the Python step loop; a rebuild with no migration): compiled in the
+    scene's cached module, not as the library kernel at its first call."""
+    pack_halo(send_rows, bodies.pos, bodies.quat, bodies.vf, bodies.wf, sbuf)
+
+
+@jit
+def ranked_halo_unpack(first_ghost, rbuf, bodies, elems, place):
+    """The ghosts take the halo rows received (:func:`dpm.kernels.halo.unpack_halo`)."""
+    unpack_halo(first_ghost, rbuf, bodies.pos, bodies.quat, bodies.vf, bodies.wf,
+                bodies.estart, elems.offset, elems.pos, place)
+
+
 #: why :func:`ranked_run` returned
 RUN_DONE, RUN_REBUILD, RUN_NAN, RUN_OVERLAP, RUN_MPI_ERROR = 0, 1, 2, 3, 4
 

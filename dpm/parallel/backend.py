@@ -77,7 +77,7 @@ from ..backends.base import STATUS_NAN, STATUS_OK, STATUS_OVERLAP, StepResult
 from ..backends.cpu import CpuBackend
 from ..errors import ParameterError
 from ..kernels.domain import owner_and_near
-from ..kernels.halo import HALO_WIDTH, pack_halo, unpack_halo
+from ..kernels.halo import HALO_WIDTH
 from ..kernels.mpi_calls import HALO_TAG
 from . import decomposition as dec
 from . import launched_ranks
@@ -164,6 +164,9 @@ class MpiBackend(CpuBackend):
         self.timing: dict[str, float] = {}
         #: the same figures summed over the calls (``reset_totals()`` starts again)
         self.totals: dict[str, float] = {}
+        #: list rebuilds where no body changed rank and no ghost layer changed (on every
+        #: rank): no migration ran, the halo did
+        self.skipped_migrations = 0
 
     def _reset_local(self) -> None:
         self.local: LocalScene | None = None
@@ -328,6 +331,7 @@ class MpiBackend(CpuBackend):
         out = np.zeros(3, np.int64)
         status = STATUS_OK
         rebuilds = 0
+        skipped_before = self.skipped_migrations
         worst_all = 0.0
         t_halo = t_mig = t_recut = t_wait = 0.0
         recuts = 0
@@ -448,12 +452,14 @@ class MpiBackend(CpuBackend):
                        "halo_bytes_per_step": float(self._hp["sbuf"].nbytes)}
         self.timing["calls"] = 1
         self.timing["rebuilds"] = rebuilds
+        self.timing["migrations_skipped"] = self.skipped_migrations - skipped_before
         self.timing["recuts"] = recuts
         self.timing["recut_s"] = t_recut
         self.timing["work_s"] = t_work
         self.timing["wait_s"] = t_wait
         self.timing["touching_weight"] = self.touching_weight
-        for k in ("calls", "steps", "rebuilds", "recuts", "steps_s", "work_s", "halo_s",
+        for k in ("calls", "steps", "rebuilds", "migrations_skipped", "recuts", "steps_s",
+                  "work_s", "halo_s",
                   "wait_s", "migrate_s", "recut_s", "gather_s", "scatter_s"):
             self.totals[k] = self.totals.get(k, 0.0) + self.timing[k]
         best = comm.allreduce((float(inner.diag[4]), self.rank), op=MPI.MAXLOC)
@@ -662,10 +668,15 @@ class MpiBackend(CpuBackend):
         from mpi4py import MPI
 
         loc, inner = self.local, self.inner
-        b, e = loc.bodies, loc.elements
+        _, bodies, elems, *_ = inner.records()
         hp = self._hp
         sbuf, rbuf = hp["sbuf"], hp["rbuf"]
-        pack_halo(hp["send_rows"], b.position, b.orientation, inner.vf, inner.wf, sbuf)
+        # (the scene's step module's halo functions: cached with it)
+        pack, unpack = self.module.ranked_halo_pack, self.module.ranked_halo_unpack
+        place = not loc.plan.spheres_only
+        self._compile_in_turn(pack, (hp["send_rows"], bodies, sbuf))
+        self._compile_in_turn(unpack, (hp["first"], rbuf, bodies, elems, place))
+        pack(hp["send_rows"], bodies, sbuf)
         reqs = []
         off = hp["recv_off"]
         for m, s in enumerate(hp["recv_rank"]):
@@ -676,8 +687,7 @@ class MpiBackend(CpuBackend):
             reqs.append(self.comm.Isend([sbuf[off[k]:off[k + 1]], MPI.DOUBLE],
                                         dest=int(d), tag=HALO_TAG))
         MPI.Request.Waitall(reqs)
-        unpack_halo(hp["first"], rbuf, b.position, b.orientation, inner.vf, inner.wf,
-                    b.element_start, e.offset, e.position, not loc.plan.spheres_only)
+        unpack(hp["first"], rbuf, bodies, elems, place)
 
     # ------------------------------------------------------------------ re-cut in a call
     def _owned_parts(self) -> tuple[np.ndarray, np.ndarray]:
@@ -779,6 +789,12 @@ class MpiBackend(CpuBackend):
         reach = self._layer() + self._body_extent(est[:n_own + 1], e.offset[:est[n_own]],
                                                   e.radius[:est[n_own]])
         new_owner, near = owner_and_near(pos, self.boxes, self.sim.period, reach)
+        if self._nothing_moves(new_owner, near):
+            # (no body changes rank and every ghost layer holds the same bodies, on every
+            # rank: the ghosts take their owners' state as at any step, the rows stay)
+            self._halo()
+            self.skipped_migrations += 1
+            return
         # touching entries only: the lists are rebuilt right after, and an entry that does
         # not touch has no history to carry (it was cleared when the pair parted)
         pool = Pool.of(b, e, inner.aux, inner.vf, inner.wf, loc.contacts, loc.wall_contacts,
@@ -887,6 +903,24 @@ class MpiBackend(CpuBackend):
             pool.walls = Entries.cat(new_w + [pool.walls], width)
         # rows no rank needs here any more drop out (old ghosts not chosen again)
         self._place(pool, owner, ghost_on, pids)
+
+    def _nothing_moves(self, new_owner: np.ndarray, near: np.ndarray) -> bool:
+        """Whether, on every rank (collective), every owned body stays and the ranks that
+        need each one as a ghost are those that hold it now (the halo plan's)."""
+        from mpi4py import MPI
+
+        hp = self._hp
+        same = bool(np.all(new_owner == self.rank))
+        sends = {int(k): hp["send_rows"][hp["send_off"][m]:hp["send_off"][m + 1]]
+                 for m, k in enumerate(hp["send_rank"])}
+        for k in range(self.ranks):
+            if not same:
+                break
+            if k != self.rank:
+                rows = np.flatnonzero(near[k])
+                was = sends.get(k, rows[:0])
+                same = len(rows) == len(was) and bool(np.array_equal(rows, was))
+        return bool(self.comm.allreduce(int(same), op=MPI.MIN))
 
     @staticmethod
     def _take_state(pool: Pool, rows: np.ndarray, msg: dict, src: np.ndarray) -> None:
