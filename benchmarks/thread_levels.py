@@ -10,6 +10,8 @@ turn (the machine's state is per process and per minute, not per run). Writes
 of the blocks against time.
 
     python benchmarks/thread_levels.py --processes 3 --rounds 6
+    python benchmarks/thread_levels.py --no-sort --tag thread_levels_no_sort
+    OMP_WAIT_POLICY=active python benchmarks/thread_levels.py --tag thread_levels_omp_active
 """
 
 from __future__ import annotations
@@ -27,14 +29,17 @@ RESULTS = HERE / "results"
 sys.path.insert(0, str(HERE))
 
 
-def blocks(rounds: int, steps: int) -> dict:
-    """One process: settle the bed, then the rounds (1 thread, 2 threads)."""
+def blocks(rounds: int, steps: int, sort: bool = True) -> dict:
+    """One process: settle the bed, then the rounds (1 thread, 2 threads); ``sort``
+    False: no cell-order renumbering after the settling."""
     import clusters_settle as cs
 
     geo = cs.geometry(2000, side=0.035)
     sim = cs.scene(cs.own_start(2000, geo), geo)
     sim.threads = 2
     sim.run(steps=geo["settle_steps"], progress=False)
+    if not sort:
+        sim.backend.sort_every = 0
     out = []
     for _ in range(rounds):
         for k in (1, 2):
@@ -52,11 +57,14 @@ def main() -> None:
     ap.add_argument("--processes", type=int, default=3)
     ap.add_argument("--rounds", type=int, default=6)
     ap.add_argument("--steps", type=int, default=2000)
+    ap.add_argument("--no-sort", action="store_true",
+                    help="no cell-order renumbering in the timed blocks")
     ap.add_argument("--tag", default="thread_levels")
     ap.add_argument("--worker", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker:
-        Path(args.worker).write_text(json.dumps(blocks(args.rounds, args.steps)))
+        Path(args.worker).write_text(json.dumps(blocks(args.rounds, args.steps,
+                                                       not args.no_sort)))
         return
     import numpy as np
 
@@ -64,8 +72,8 @@ def main() -> None:
     for p in range(args.processes):
         tmp = RESULTS / f".{args.tag}_{p}.json"
         subprocess.run([sys.executable, __file__, "--rounds", str(args.rounds), "--steps",
-                        str(args.steps), "--worker", str(tmp)], check=True,
-                       env=dict(os.environ))
+                        str(args.steps), "--worker", str(tmp)]
+                       + ["--no-sort"] * args.no_sort, check=True, env=dict(os.environ))
         runs.append(json.loads(tmp.read_text()))
         tmp.unlink()
         for b in runs[-1]["blocks"]:
@@ -76,7 +84,8 @@ def main() -> None:
     two = [b["us_per_step"] for r in runs for b in r["blocks"] if b["threads"] == 2]
     one = [b["us_per_step"] for r in runs for b in r["blocks"] if b["threads"] == 1]
     result = {"scene": "clusters_settle settled bed, 2,000 four-sphere clusters",
-              "steps_per_block": args.steps, "processes": runs,
+              "steps_per_block": args.steps, "cell_order_renumbering": not args.no_sort,
+              "processes": runs,
               "ratio_1_over_2_per_round": ratios,
               "ratio_median": float(np.median(flat)), "ratio_min": float(min(flat)),
               "ratio_max": float(max(flat)),

@@ -425,7 +425,7 @@ class MpiBackend(CpuBackend):
                 ctl, bodies, elems, pairs, wl, bnd = rec
             else:  # (after a migration the ghosts came with it)
                 t0 = clock()
-                self._halo()
+                self._halo(bodies, elems)
                 t_halo += clock() - t0
             t0 = clock()
             worst = module.ranked_forces(dt, ctl, bodies, elems, pairs, wl, bnd, inner.diag)
@@ -628,7 +628,8 @@ class MpiBackend(CpuBackend):
         inner.sim = loc
         inner.aux = aux
         inner._scratch()
-        inner.vf, inner.wf = vf, wf
+        inner.vf[:] = vf
+        inner.wf[:] = wf
         # the halo plan: owned rows (local index, id order) sent to each rank
         sends = {}
         for k in range(P):
@@ -661,14 +662,16 @@ class MpiBackend(CpuBackend):
                     "first": n_own}
 
     # ------------------------------------------------------------------ halo
-    def _halo(self) -> None:
+    def _halo(self, bodies: Any = None, elems: Any = None) -> None:
         """Owners send what the force pass reads of their ghosts (after the pre-force
         part: position, quaternion, the velocities the forces see) to the ranks that hold
-        them; ghosts take it and place their elements."""
+        them; ghosts take it and place their elements. ``bodies``, ``elems``: the
+        current records (taken here if not given)."""
         from mpi4py import MPI
 
         loc, inner = self.local, self.inner
-        _, bodies, elems, *_ = inner.records()
+        if bodies is None:
+            _, bodies, elems, *_ = inner.records()
         hp = self._hp
         sbuf, rbuf = hp["sbuf"], hp["rbuf"]
         # (the scene's step module's halo functions: cached with it)
@@ -910,16 +913,12 @@ class MpiBackend(CpuBackend):
         from mpi4py import MPI
 
         hp = self._hp
-        same = bool(np.all(new_owner == self.rank))
         sends = {int(k): hp["send_rows"][hp["send_off"][m]:hp["send_off"][m + 1]]
                  for m, k in enumerate(hp["send_rank"])}
-        for k in range(self.ranks):
-            if not same:
-                break
-            if k != self.rank:
-                rows = np.flatnonzero(near[k])
-                was = sends.get(k, rows[:0])
-                same = len(rows) == len(was) and bool(np.array_equal(rows, was))
+        empty = np.zeros(0, np.int64)
+        same = bool(np.all(new_owner == self.rank)) and all(
+            np.array_equal(np.flatnonzero(near[k]), sends.get(k, empty))
+            for k in range(self.ranks) if k != self.rank)
         return bool(self.comm.allreduce(int(same), op=MPI.MIN))
 
     @staticmethod

@@ -25,23 +25,6 @@ import numpy as np
 from ..state import Bodies, Contacts, Elements, WallContacts
 
 
-class Scratch:
-    """Arrays kept from one call to the next, grown as needed (a gather's buffers: fresh
-    ones of tens of MB each call would fault their pages in again, ~1.5 us a 4 kB page,
-    since dpm returns freed blocks over 1 MB to the system: :mod:`dpm._memory`)."""
-
-    def __init__(self) -> None:
-        self.arrays: dict[str, np.ndarray] = {}
-
-    def get(self, name: str, shape: tuple, dtype: Any = np.float64) -> np.ndarray:
-        """An uninitialised C-contiguous array ``name`` of ``shape``."""
-        n = int(np.prod(shape))
-        a = self.arrays.get(name)
-        if a is None or a.size < n or a.dtype != dtype:
-            a = self.arrays[name] = np.empty(n + n // 4 + 16, dtype)
-        return a[:n].reshape(shape)
-
-
 def take(a: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """Rows ``rows`` of ``a`` (``np.take`` along the first axis: 3-5x faster than ``a[rows]``
     for 2-D arrays, which numpy indexes through its general path)."""

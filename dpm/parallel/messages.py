@@ -53,7 +53,7 @@ from ..kernels.migrate import (
     put_segments,
     take_segments,
 )
-from .local import Entries, Pool, Scratch, element_rows
+from .local import Entries, Pool, element_rows
 
 #: the sections of a message, in buffer order
 SECTIONS = ("bodies", "elements", "pairs", "walls")
@@ -83,6 +83,22 @@ def mpi_counts(sizes: np.ndarray, what: str) -> tuple[list[int], list[int]]:
                              f"{int(sizes.sum())} values, more than MPI's count limit "
                              f"{MAX_COUNT}; use more ranks or a smaller scene")
     return sizes.tolist(), disp.tolist()
+
+
+class Scratch:
+    """Arrays kept from one call to the next, grown as needed (a gather's buffers: fresh
+    ones of tens of MB each call would fault their pages in again)."""
+
+    def __init__(self) -> None:
+        self.arrays: dict[str, np.ndarray] = {}
+
+    def get(self, name: str, shape: tuple, dtype: Any = np.float64) -> np.ndarray:
+        """An uninitialised C-contiguous array ``name`` of ``shape``."""
+        n = int(np.prod(shape))
+        a = self.arrays.get(name)
+        if a is None or a.size < n or a.dtype != dtype:
+            a = self.arrays[name] = np.empty(n + n // 4 + 16, dtype)
+        return a[:n].reshape(shape)
 
 
 class Section:
