@@ -60,7 +60,7 @@ def main() -> None:
     pairs = PairList(c.start, c.key, c.history, c.active, c.force, c.t_start, c.t_pair)
     contact = timed(lambda: m.contact_pass(0.0, ctl, bodies, elems, pairs, walls, bnd), 200)
     summed = timed(lambda: m.sum_pass(0.0, False, ctl, bodies, elems, pairs, walls), 200)
-    rebuild = timed(lambda: m.rebuild(ctl, elems, pairs, walls, bnd, be.diag), 10)
+    rebuild = timed(lambda: m.rebuild(ctl, bodies, elems, pairs, walls, bnd, be.diag), 10)
     print(f"{a.case} box, {n} spheres, {c.count} listed pairs, {sim.contact_count()} touching; "
           f"us per step: step {step:.0f} | begin {begin:.0f} ({begin / n * 1e3:.0f} ns per "
           f"body) | contact {contact:.0f} | sum {summed:.0f} | one rebuild {rebuild:.0f}")

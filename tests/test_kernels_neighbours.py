@@ -107,3 +107,33 @@ def test_ghost_rows_list_no_pairs_among_themselves():
     assert got == {(i, k) for i, k in full if min(i, k) < first_ghost}
     assert any(i < first_ghost <= k for i, k in got)  # (owned-ghost pairs are there)
     assert count_g == len(got) < count
+
+
+@pytest.mark.parametrize("axes", [(0,), (1,), (2,), (0, 1, 2)])
+@pytest.mark.parametrize("length", [0.05, 0.011, 0.006])
+def test_periodic_matches_brute_force(axes, length):
+    """Periodic faces: a stencil row that wraps round the x axis is scanned as two runs of
+    cells; boxes of many cells a side, 2 cells and 1 cell."""
+    rng = np.random.default_rng(int(length * 1e4) + len(axes))
+    n = 800
+    span = np.array([0.05, 0.05, 0.05])
+    period = np.zeros(6)
+    for a in axes:
+        span[a] = length
+        period[3 + a] = length
+    pos = rng.uniform(0, 1, (n, 3)) * span
+    rad = rng.uniform(0.8e-3, 2e-3, n)
+    owner = np.arange(n)
+    skin = 5e-4
+    cap = n * n // 2
+    start = np.zeros(n + 1, np.int64)
+    j = np.zeros(cap, np.int64)
+    count = neighbours.build_neighbour_list(
+        pos, rad, owner, skin, start, j, np.zeros((cap, N_HISTORY)), np.zeros(cap, np.uint8),
+        np.zeros(n + 1, np.int64), np.zeros(cap, np.int64), period, n)
+    got = {(i, int(j[k])) for i in range(n) for k in range(start[i], start[i + 1])}
+    ref = set(neighbours.brute_force_pairs(pos, rad, owner, skin, period))
+    assert count == len(ref) and got == ref
+    wrapped = [(a, b) for a, b in ref
+               if any(abs(pos[a, x] - pos[b, x]) > length / 2 for x in axes)]
+    assert wrapped  # pairs across the periodic faces are among them

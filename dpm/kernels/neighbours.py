@@ -119,6 +119,25 @@ def cell_range(c, dims, length):
 
 
 @inline_jit
+def x_runs(first, count, dims):
+    """Cells first..first+count-1 along x (taken modulo ``dims``) as two runs of cells
+    [x0, x1) and [xw0, xw1) (the second empty unless the range wraps round a periodic
+    axis)."""
+    x0 = first
+    x1 = first + count
+    xw0 = 0
+    xw1 = 0
+    if x0 < 0:
+        xw0 = x0 + dims
+        xw1 = dims
+        x0 = 0
+    elif x1 > dims:
+        xw1 = x1 - dims
+        x1 = dims
+    return x0, x1, xw0, xw1
+
+
+@inline_jit
 def minimum_image(dx, length):
     """dx of the nearest periodic image (unchanged if length is 0)."""
     if length > 0.0:
@@ -152,6 +171,7 @@ def _search(sp, so, skin, lo, width, dims, cell_start, order, counts, out_start,
     Elements from ``first_ghost`` on (an MPI rank's ghosts) list no partners: a pair of two
     ghosts is its owners' work, and a ghost's pairs with owned elements sit in those rows."""
     n = sp.shape[0]
+    periodic = period[3] > 0.0 or period[4] > 0.0 or period[5] > 0.0
     for si in prange(n):
         i = order[si]
         if i >= first_ghost:
@@ -171,20 +191,29 @@ def _search(sp, so, skin, lo, width, dims, cell_start, order, counts, out_start,
         first = out_start[i] if fill else 0
         room = out_end[i] - first if fill else 0
         count = 0
+        # the x neighbours of a cell are consecutive cells, and their elements one run of
+        # the cell order: each row of the stencil is scanned as one or (wrapped round a
+        # periodic x) two runs, not cell by cell
+        x0, x1, xw0, xw1 = x_runs(fx, nx, dims[0])
         for tz in range(nz):
             gz = (fz + tz) % dims[2]
             for ty in range(ny):
                 gy = (fy + ty) % dims[1]
-                for tx in range(nx):
-                    gx = (fx + tx) % dims[0]
-                    c = gx + dims[0] * (gy + dims[1] * gz)
-                    for s in range(cell_start[c], cell_start[c + 1]):
+                row = dims[0] * (gy + dims[1] * gz)
+                for run in range(2):
+                    a = x0 if run == 0 else xw0
+                    b = x1 if run == 0 else xw1
+                    for s in range(cell_start[row + a], cell_start[row + b]):
                         j = order[s]
                         if j <= i:
                             continue
-                        dx = minimum_image(xi - sp[s, 0], period[3])
-                        dy = minimum_image(yi - sp[s, 1], period[4])
-                        dz = minimum_image(zi - sp[s, 2], period[5])
+                        dx = xi - sp[s, 0]
+                        dy = yi - sp[s, 1]
+                        dz = zi - sp[s, 2]
+                        if periodic:  # (the same for every pair: hoisted by the compiler)
+                            dx = minimum_image(dx, period[3])
+                            dy = minimum_image(dy, period[4])
+                            dz = minimum_image(dz, period[5])
                         cut = ri + sp[s, 3]
                         if dx * dx + dy * dy + dz * dz < cut * cut and so[s] != oi:
                             if count < room:  # insertion into the sorted segment of i
