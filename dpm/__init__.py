@@ -35,6 +35,7 @@ from .motion import (
     TriangularOscillation,
     Tumbling,
 )
+from .parallel import is_root, notice
 from .plugins import register, registry
 from .reciprocating import Reciprocating
 from .regions import BoxRegion, CylinderRegion, DiscFace, Face, MeshFace, RectangleFace, Region
@@ -50,7 +51,7 @@ __all__ = [
     "Oscillation", "Outlet", "ParameterError", "Region", "register", "registry", "restart",
     "Rotation", "SceneError", "Shape", "Simulation", "Translation", "TriangularOscillation",
     "Tumbling", "UnknownNameError", "UnstableRunError", "__version__", "Reciprocating",
-    "Face", "RectangleFace", "DiscFace", "MeshFace", "advise",
+    "Face", "RectangleFace", "DiscFace", "MeshFace", "advise", "is_root", "notice",
 ]
 
 

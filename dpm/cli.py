@@ -14,10 +14,9 @@ from .errors import DpmError, ParameterError
 
 def say(text: str) -> None:
     """Print (on rank 0 only under MPI: every rank runs the same command)."""
-    from .parallel import rank
+    from .parallel import notice
 
-    if rank() == 0:
-        print(text)
+    notice(text)
 
 
 def _cmd_run(args: argparse.Namespace) -> int:

@@ -317,9 +317,9 @@ def run_speed(fraction: float, out: Path, length: float, fill: float, revolution
     t_avg = until - average * t_rev
     path = out / f"ball_mill_{round(fraction * 100)}.h5"
     sim.output(str(path), every=frame_every, overwrite=True)
-    print(f"{fraction:.0%} critical ({rpm_of(fraction):.1f} rpm): {n} beads, slice "
-          f"{length * 1e3:.1f} mm, dt = {sim.dt:g} s, {until:.2f} s to run "
-          f"({revolutions:g} rev), averages from {t_avg:.2f} s", flush=True)
+    dpm.notice(f"{fraction:.0%} critical ({rpm_of(fraction):.1f} rpm): {n} beads, slice "
+               f"{length * 1e3:.1f} mm, dt = {sim.dt:g} s, {until:.2f} s to run "
+               f"({revolutions:g} rev), averages from {t_avg:.2f} s", flush=True)
     rec = {k: [] for k in ("t", "power", "torque", "work", "xcm", "zcm", "Ly", "dissipated",
                            "kinetic", "overlap")}
     w0 = time.perf_counter()
@@ -393,10 +393,11 @@ def run_speed(fraction: float, out: Path, length: float, fill: float, revolution
         "max_map_speed": float(np.nanmax(speed)),
         "h5": path.name, "xdmf": path.with_suffix(".xdmf").name,
     }
-    print(f"  {wall:.0f} s wall ({psteps:.3g} particle-steps/s); power {res['power_mean_W']:.3f}"
-          f" W (work rate {work_rate:.3f} W, torque arm {res['power_torque_arm_W']:.3f} W) "
-          f"for the slice; toe {angles['toe']:.0f} deg, shoulder {angles['shoulder']:.0f} "
-          f"deg", flush=True)
+    dpm.notice(f"  {wall:.0f} s wall ({psteps:.3g} particle-steps/s); power "
+               f"{res['power_mean_W']:.3f} W (work rate {work_rate:.3f} W, torque arm "
+               f"{res['power_torque_arm_W']:.3f} W) "
+               f"for the slice; toe {angles['toe']:.0f} deg, shoulder {angles['shoulder']:.0f} "
+               f"deg", flush=True)
     return {"result": res, "field": field, "series": r}
 
 
@@ -493,9 +494,9 @@ def full_charge(steps: int, out: Path, settle: int = 800) -> dict:
     sim = build(0.7, length=L_MILL, periodic=False, ramp=0.0)
     n = len(sim.bodies)
     t_build = time.perf_counter() - t0
-    print(f"full charge: {n} beads in the whole {L_MILL * 1e3:.0f} mm mill (built in "
-          f"{t_build:.1f} s); {settle} steps to fall into contact, then {steps} timed "
-          f"steps at dt = {sim.dt:g} s", flush=True)
+    dpm.notice(f"full charge: {n} beads in the whole {L_MILL * 1e3:.0f} mm mill (built in "
+               f"{t_build:.1f} s); {settle} steps to fall into contact, then {steps} timed "
+               f"steps at dt = {sim.dt:g} s", flush=True)
     t0 = time.perf_counter()
     sim.run(steps=1, progress=False)         # prepare + (cached) compile + neighbour lists
     t_first = time.perf_counter() - t0
@@ -520,11 +521,12 @@ def full_charge(steps: int, out: Path, settle: int = 800) -> dict:
            "note": f"{steps} steps of a charge {settle} steps after release from a "
                    "lattice, not a revolution"}
     sim.close()
-    print(f"  {contacts / n:.2f} contacts per bead; {wall:.1f} s for {steps} steps: "
-          f"{ps:.3g} particle-steps/s, {res['s_per_1000_steps']:.0f} s per 1000 steps "
-          f"(thesis GPU: 13.8 s, {THESIS_PARTICLE_STEPS:.3g}); one revolution at 70 % = "
-          f"{res['revolution_steps_70pct']:.0f} steps")
-    (out / "ball_mill_full_charge.json").write_text(json.dumps(res, indent=1))
+    dpm.notice(f"  {contacts / n:.2f} contacts per bead; {wall:.1f} s for {steps} steps: "
+               f"{ps:.3g} particle-steps/s, {res['s_per_1000_steps']:.0f} s per 1000 steps "
+               f"(thesis GPU: 13.8 s, {THESIS_PARTICLE_STEPS:.3g}); one revolution at 70 % = "
+               f"{res['revolution_steps_70pct']:.0f} steps")
+    if dpm.is_root():  # (rank 0 writes: every rank holds the result)
+        (out / "ball_mill_full_charge.json").write_text(json.dumps(res, indent=1))
     return res
 
 
@@ -543,7 +545,7 @@ def full_charge_revolutions(revolutions: float, out: Path, settle: int,
     if resume and ckpt.exists() and ckpt.with_suffix(".json").exists():
         sim = dpm.restart(ckpt)
         res = json.loads(ckpt.with_suffix(".json").read_text())
-        print(f"resumed at step {res['steps_done']}", flush=True)
+        dpm.notice(f"resumed at step {res['steps_done']}", flush=True)
     else:
         sim = build(0.7, length=L_MILL, periodic=False, ramp=0.0)
         res = None
@@ -563,8 +565,8 @@ def full_charge_revolutions(revolutions: float, out: Path, settle: int,
            "samples": {k: [] for k in ("t", "steps_done", "wall_s", "particle_steps_per_s",
                                        "contacts_per_bead", "power_W", "torque_Nm",
                                        "torque_arm_W", "work_J")}}
-    print(f"full charge: {n} beads, {settle} settling steps then {revolutions} "
-          f"revolution(s) = {total} steps at 70 % critical", flush=True)
+    dpm.notice(f"full charge: {n} beads, {settle} settling steps then {revolutions} "
+               f"revolution(s) = {total} steps at 70 % critical", flush=True)
     t0 = time.perf_counter()
     sim.run(steps=settle, progress=False)
     res["settle_s"] = time.perf_counter() - t0
@@ -603,12 +605,15 @@ def _full_charge_loop(sim, res, out, ckpt, js, total, sample, mass) -> dict:
         res["torque_arm_second_half_W"] = float(np.mean(smp["torque_arm_W"][half]))
         if len(smp["t"]) % 20 == 0 or done >= total:
             sim.checkpoint(ckpt)  # (with the figures up to it, which a resume takes)
-            ckpt.with_suffix(".json").write_text(json.dumps(res))
-        js.write_text(json.dumps(res, indent=1))
-        print(f"  t = {sim.time:.3f} s, {done}/{total} steps, {run_wall:.0f} s, "
-              f"{res['particle_steps_per_s']:.3g} p-s/s, power {p:.1f} W", flush=True)
+            if dpm.is_root():
+                ckpt.with_suffix(".json").write_text(json.dumps(res))
+        if dpm.is_root():  # (rank 0 writes: every rank holds the result)
+            js.write_text(json.dumps(res, indent=1))
+        dpm.notice(f"  t = {sim.time:.3f} s, {done}/{total} steps, {run_wall:.0f} s, "
+                   f"{res['particle_steps_per_s']:.3g} p-s/s, power {p:.1f} W", flush=True)
     sim.close()
-    full_charge_picture(res, out / "ball_mill_full_charge.png")
+    if dpm.is_root():
+        full_charge_picture(res, out / "ball_mill_full_charge.png")
     return res
 
 
@@ -704,10 +709,11 @@ def main(argv: list[str] | None = None) -> dict:
                          for s in speeds},
         "speeds": [r["result"] for r in results],
     }
-    (out / "ball_mill.json").write_text(json.dumps(summary, indent=1))
-    picture(results, out / "ball_mill.png", show=len(results) // 2)
-    print(f"{len(speeds)} speed(s) in {wall:.0f} s; {out / 'ball_mill.json'}, "
-          f"{out / 'ball_mill.png'}")
+    if dpm.is_root():  # (rank 0 writes: every rank holds the result)
+        (out / "ball_mill.json").write_text(json.dumps(summary, indent=1))
+        picture(results, out / "ball_mill.png", show=len(results) // 2)
+    dpm.notice(f"{len(speeds)} speed(s) in {wall:.0f} s; {out / 'ball_mill.json'}, "
+               f"{out / 'ball_mill.png'}")
     summary["_results"] = results
     return summary
 

@@ -73,7 +73,7 @@ def main(argv: list[str] | None = None) -> None:
     wall = time.perf_counter() - t0
     z = float(sim.bodies.position[:, 2].mean())
     n = len(sim.bodies)
-    if dpm.parallel.rank() != 0:  # (under mpiexec every rank holds the whole result)
+    if not dpm.is_root():  # (under mpiexec every rank holds the whole result: one reports)
         return
     print(f"{n} spheres, {steps} steps in {wall:.1f} s ({n * steps / wall:.3g} particle-steps/s"
           f" incl. compile); mean height {z * 1e3:.3f} mm")

@@ -218,9 +218,9 @@ def main(argv: list[str] | None = None) -> dict:
     doc = {"scene": "drop_test", "quick": args.quick, "restitution": E_SET, "h0_m": H0,
            "radius_m": R, "density": RHO, "dt_s": DT, "steps": steps, "wall_s": wall,
            "brilliantov_A_s": info["brilliantov_A_s"], "time": t.tolist(), "models": {}}
-    print(f"{len(MODELS)} beads, {steps} steps of {DT:g} s in {wall:.1f} s")
-    print(f"{'model':<23s} {'bounce':>6s} {'h [mm]':>9s} {'ratio':>8s} {'e^2':>8s} "
-          f"{'predicted':>9s} {'rel.err':>8s}")
+    dpm.notice(f"{len(MODELS)} beads, {steps} steps of {DT:g} s in {wall:.1f} s")
+    dpm.notice(f"{'model':<23s} {'bounce':>6s} {'h [mm]':>9s} {'ratio':>8s} {'e^2':>8s} "
+               f"{'predicted':>9s} {'rel.err':>8s}")
     for j, name in enumerate(MODELS):
         h, tb = flight_heights(t, z[:, j], vz[:, j])
         h = h[:bounces + 1]
@@ -237,14 +237,15 @@ def main(argv: list[str] | None = None) -> dict:
                                "z": (z[:, j] - PLATE_Z - R).tolist(),
                                "speed_dependent": name not in SPEED_INDEPENDENT}
         for k, (r, q, e) in enumerate(zip(ratio, pred, err, strict=True)):
-            print(f"{name:<23s} {k + 1:6d} {h[k + 1] * 1e3:9.4f} {r:8.5f} {E_SET**2:8.5f} "
-                  f"{q:9.5f} {e:+8.2%}")
-    (out / "drop_test.json").write_text(json.dumps(doc))
-    try:
-        picture(doc, out / "drop_test.png")
-    except ImportError:
-        print("matplotlib is missing: no picture (pip install 'dpm[plot]')")
-    print(f"output in {out}/")
+            dpm.notice(f"{name:<23s} {k + 1:6d} {h[k + 1] * 1e3:9.4f} {r:8.5f} {E_SET**2:8.5f} "
+                       f"{q:9.5f} {e:+8.2%}")
+    if dpm.is_root():  # (rank 0 writes: every rank holds the result)
+        (out / "drop_test.json").write_text(json.dumps(doc))
+        try:
+            picture(doc, out / "drop_test.png")
+        except ImportError:
+            print("matplotlib is missing: no picture (pip install 'dpm[plot]')")
+    dpm.notice(f"output in {out}/")
     return doc
 
 

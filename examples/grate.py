@@ -404,12 +404,13 @@ def run_case(case: Case, log: bool = True) -> dict:
                  "n": geo.n[[0, 2]].tolist(), "moving": geo.moving.tolist()},
     }
     if log:
-        print(f"{label_of(case)}: {len(tracer_ids)} tracers, {sel.sum()} out "
-              f"({result['tracer_mass_out_fraction']:.0%} of their mass), t_m = {rtd.mean:.1f} s"
-              f" (std {result['std_residence_s']:.1f} s), bed "
-              f"{result['bed_height_mean_m'] * 1e3:.0f} mm, {result['bodies_mean']:.0f} bodies, "
-              f"{sim.time:.0f} s simulated in "
-              f"{wall:.0f} s; balance {'ok' if balance['exact'] else 'BROKEN'}", flush=True)
+        dpm.notice(f"{label_of(case)}: {len(tracer_ids)} tracers, {sel.sum()} out "
+                   f"({result['tracer_mass_out_fraction']:.0%} of their mass), t_m = "
+                   f"{rtd.mean:.1f} s (std {result['std_residence_s']:.1f} s), bed "
+                   f"{result['bed_height_mean_m'] * 1e3:.0f} mm, "
+                   f"{result['bodies_mean']:.0f} bodies, "
+                   f"{sim.time:.0f} s simulated in "
+                   f"{wall:.0f} s; balance {'ok' if balance['exact'] else 'BROKEN'}", flush=True)
     return result
 
 
@@ -625,8 +626,9 @@ def main(argv: list[str] | None = None) -> dict:
                 done[key] = run_case(Case(**kw))
             results.append(done[key])
         doc = {"set": name, "dt": DT, "runs": results}
-        (out / f"grate_{name}.json").write_text(compact_json(doc))
-        picture(results, out / f"grate_{name}.png", f"grate: {name}")
+        if dpm.is_root():  # (rank 0 writes: every rank holds the result)
+            (out / f"grate_{name}.json").write_text(compact_json(doc))
+            picture(results, out / f"grate_{name}.png", f"grate: {name}")
         summary[name] = doc
     return summary
 

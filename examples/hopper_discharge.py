@@ -224,23 +224,23 @@ def main(argv: list[str] | None = None) -> dict:
         r.update(orifice_m=D, bulk_density=rho_b,
                  beverloo_kg_s=an.beverloo(rho_b, D, D_BEAD, C=0.58, k=1.5))
         rows.append(r)
-        print(f"silo D = {D * 1e3:.0f} mm: W = {r['rate_kg_s']:.4f} kg/s (Beverloo C 0.58, "
-              f"k 1.5: {r['beverloo_kg_s']:.4f}), rho_b = {rho_b:.0f} kg/m3, "
-              f"{r['bodies']} beads, {r['wall_s']:.0f} s", flush=True)
+        dpm.notice(f"silo D = {D * 1e3:.0f} mm: W = {r['rate_kg_s']:.4f} kg/s (Beverloo C 0.58, "
+                   f"k 1.5: {r['beverloo_kg_s']:.4f}), rho_b = {rho_b:.0f} kg/m3, "
+                   f"{r['bodies']} beads, {r['wall_s']:.0f} s", flush=True)
     result["silo"] = rows
     if len(rows) >= 2:
         rho_b = float(np.mean([r["bulk_density"] for r in rows]))
         C, k = an.fit_beverloo([r["orifice_m"] for r in rows], [r["rate_kg_s"] for r in rows],
                                D_BEAD, rho_b)
         result["beverloo_fit"] = {"C": C, "k": k, "bulk_density": rho_b}
-        print(f"Beverloo fit: C = {C:.3f} (usual 0.55-0.65), k = {k:.2f} (usual 1.2-3)")
+        dpm.notice(f"Beverloo fit: C = {C:.3f} (usual 0.55-0.65), k = {k:.2f} (usual 1.2-3)")
     if not a.quick:
         for name, build in (("cone_analytic", lambda: conical(False)),
                             ("cone_mesh", lambda: conical(True)), ("wedge", wedge)):
             r = discharge(build())
             result[name] = r
-            print(f"{name}: W = {r['rate_kg_s']:.4f} kg/s, {r['bodies']} beads, "
-                  f"{r['wall_s']:.0f} s", flush=True)
+            dpm.notice(f"{name}: W = {r['rate_kg_s']:.4f} kg/s, {r['bodies']} beads, "
+                       f"{r['wall_s']:.0f} s", flush=True)
         sim = steel_hopper()
         r = discharge(sim, 0.5)
         while len(sim.bodies) and sim.time < T_OPEN + 10.0:  # until nothing more leaves
@@ -255,12 +255,13 @@ def main(argv: list[str] | None = None) -> dict:
         # (a flat bottom keeps a dead zone at the wall: it never empties completely)
         r["last_out_after_s"] = float(sim.outlets[0].records["time"].max() - T_OPEN)
         result["steel_hopper"] = r
-        print(f"steel hopper: {r['removed']} of {r['bodies']} out, the last "
-              f"{r['last_out_after_s']:.2f} s after the opening; mass-weighted mean residence "
-              "after opening "
-              f"{r['mean_residence_after_opening_s']:.3f} s")
-    (out / "hopper_discharge.json").write_text(json.dumps(result, indent=1))
-    picture(result, out / "hopper_discharge.png")
+        dpm.notice(f"steel hopper: {r['removed']} of {r['bodies']} out, the last "
+                   f"{r['last_out_after_s']:.2f} s after the opening; mass-weighted mean residence "
+                   "after opening "
+                   f"{r['mean_residence_after_opening_s']:.3f} s")
+    if dpm.is_root():  # (rank 0 writes: every rank holds the result)
+        (out / "hopper_discharge.json").write_text(json.dumps(result, indent=1))
+        picture(result, out / "hopper_discharge.png")
     return result
 
 

@@ -387,27 +387,29 @@ def main(argv: list[str] | None = None) -> list[dict]:
         r = run_speed(fr, radius, depth, steady_time(fr, radius, args.quick), out)
         results.append(r)
         c = r["criteria"]
-        print(f"Fr {fr:<7g} {r['rpm']:6.2f} rpm  {r['regime']:<12s} angle "
-              f"{r['angle_deg']:5.1f} +- {r['angle_std_deg']:4.1f} deg  torque "
-              f"{r['torque_Nm'] * 1e3:7.3f} mN m (M g x_cm {r['gravity_torque_Nm'] * 1e3:7.3f})"
-              f"  power {r['power_W'] * 1e3:7.3f} mW (-T w {r['torque_omega_W'] * 1e3:7.3f},"
-              f" dE/dt {r['energy_change_W'] * 1e3:+.3f})  Lacey {r['lacey'][-1]:.2f} after "
-              f"{r['lacey_revolutions'][-1]:.2f} rev  [corot {c['corotating_mean']:.2f} "
-              f"above {c['above_axis_mean']:.2f} free {c['free_flight_mean']:.3f} rest "
-              f"{c['resting_share']:.2f} thirds "
-              f"{' '.join(f'{x:.0f}' for x in c['third_angles_deg'])}]  "
-              f"{r['wall_s']:.0f} s", flush=True)
+        dpm.notice(f"Fr {fr:<7g} {r['rpm']:6.2f} rpm  {r['regime']:<12s} angle "
+                   f"{r['angle_deg']:5.1f} +- {r['angle_std_deg']:4.1f} deg  torque "
+                   f"{r['torque_Nm'] * 1e3:7.3f} mN m "
+                   f"(M g x_cm {r['gravity_torque_Nm'] * 1e3:7.3f})"
+                   f"  power {r['power_W'] * 1e3:7.3f} mW (-T w {r['torque_omega_W'] * 1e3:7.3f},"
+                   f" dE/dt {r['energy_change_W'] * 1e3:+.3f})  Lacey {r['lacey'][-1]:.2f} after "
+                   f"{r['lacey_revolutions'][-1]:.2f} rev  [corot {c['corotating_mean']:.2f} "
+                   f"above {c['above_axis_mean']:.2f} free {c['free_flight_mean']:.3f} rest "
+                   f"{c['resting_share']:.2f} thirds "
+                   f"{' '.join(f'{x:.0f}' for x in c['third_angles_deg'])}]  "
+                   f"{r['wall_s']:.0f} s", flush=True)
     total = time.perf_counter() - t_all
     doc = {"scene": "rotary_kiln", "quick": args.quick, "radius_m": radius,
            "slice_m": depth, "bead_radius_m": R_BEAD, "fill": FILL, "ribs": RIBS,
            "mellmann_2001_ranges": MELLMANN, "wall_s": total, "speeds": results}
-    (out / "rotary_kiln.json").write_text(json.dumps(doc, indent=1))
-    try:
-        picture(results, out / "rotary_kiln.png")
-    except ImportError:
-        print("matplotlib is missing: no picture (pip install 'dpm[plot]')")
-    print(f"{len(results)} speeds in {total:.0f} s; output in {out}/ (open the .xdmf files "
-          f"in ParaView)")
+    if dpm.is_root():  # (rank 0 writes: every rank holds the result)
+        (out / "rotary_kiln.json").write_text(json.dumps(doc, indent=1))
+        try:
+            picture(results, out / "rotary_kiln.png")
+        except ImportError:
+            print("matplotlib is missing: no picture (pip install 'dpm[plot]')")
+    dpm.notice(f"{len(results)} speeds in {total:.0f} s; output in {out}/ (open the .xdmf files "
+               f"in ParaView)")
     return results
 
 

@@ -74,8 +74,8 @@ def main(argv: list[str] | None = None) -> None:
     until = 0.4 if args.quick else 2.0
     sim = build()
     sim.output(args.output, every=0.02, overwrite=True)  # (the example's own file)
-    print(f"{len(sim.bodies)} beads in a {2 * R_DRUM * 1e3:.0f} mm drum at {RPM:g} rpm; "
-          f"dt = {sim.dt:g} s")
+    dpm.notice(f"{len(sim.bodies)} beads in a {2 * R_DRUM * 1e3:.0f} mm drum at {RPM:g} rpm; "
+               f"dt = {sim.dt:g} s")
     t0 = time.perf_counter()
     torques, powers = [], []
     while sim.time < until - 1e-12:
@@ -85,12 +85,12 @@ def main(argv: list[str] | None = None) -> None:
     wall = time.perf_counter() - t0
     sim.close()
     half = len(torques) // 2
-    print(f"simulated {sim.time:.2f} s in {wall:.1f} s "
-          f"({len(sim.bodies) * sim.step_count / wall:.3g} particle-steps/s)")
-    print(f"drive torque about the axis (second half): {np.mean(torques[half:]):+.4f} N m; "
-          f"power drawn {np.mean(powers[half:]):.4f} W")
-    print(f"dynamic angle of repose: {repose_angle(sim.bodies.position):.1f} deg")
-    print(f"output: {args.output} (open {args.output[:-3]}.xdmf in ParaView)")
+    dpm.notice(f"simulated {sim.time:.2f} s in {wall:.1f} s "
+               f"({len(sim.bodies) * sim.step_count / wall:.3g} particle-steps/s)")
+    dpm.notice(f"drive torque about the axis (second half): {np.mean(torques[half:]):+.4f} N m; "
+               f"power drawn {np.mean(powers[half:]):.4f} W")
+    dpm.notice(f"dynamic angle of repose: {repose_angle(sim.bodies.position):.1f} deg")
+    dpm.notice(f"output: {args.output} (open {args.output[:-3]}.xdmf in ParaView)")
 
 
 if __name__ == "__main__":

@@ -352,17 +352,17 @@ def main(argv: list[str] | None = None) -> None:
     if args.until is not None:
         case.until = args.until
     out = run_case(case, progress=not args.quick)
-    print(f"simulated {out['time']:.2f} s in {out['wall_s']:.1f} s "
-          f"({out['particle_steps_per_s']:.3g} particle-steps/s); fed {out['fed']}, "
-          f"exited {out['exited']}, in the machine {out['present']}, thrown out of the "
-          f"scene {out['escaped']}")
+    dpm.notice(f"simulated {out['time']:.2f} s in {out['wall_s']:.1f} s "
+               f"({out['particle_steps_per_s']:.3g} particle-steps/s); fed {out['fed']}, "
+               f"exited {out['exited']}, in the machine {out['present']}, thrown out of the "
+               f"scene {out['escaped']}")
     for lv in range(len(out["sorted"]), 0, -1):
-        print(f"  level {lv}: sorted {out['sorted'][lv - 1]:5d}  gangue "
-              f"{out['gangue'][lv - 1]:5d}")
-    print(f"machine efficiency c = {out['machine_efficiency']:.1f} % (eq. 4.33); deck "
-          "screening (top down): " + ", ".join(f"{100 * x:.0f} %" if x == x else "-"
-                                               for x in out["deck_screening"][::-1]))
-    if args.json:
+        dpm.notice(f"  level {lv}: sorted {out['sorted'][lv - 1]:5d}  gangue "
+                   f"{out['gangue'][lv - 1]:5d}")
+    dpm.notice(f"machine efficiency c = {out['machine_efficiency']:.1f} % (eq. 4.33); deck "
+               "screening (top down): " + ", ".join(f"{100 * x:.0f} %" if x == x else "-"
+                                                    for x in out["deck_screening"][::-1]))
+    if args.json and dpm.is_root():  # (rank 0 writes: every rank holds the result)
         with open(args.json, "w") as fh:
             json.dump(out, fh, indent=1)
 

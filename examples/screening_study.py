@@ -44,6 +44,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from screening_machine import Case, machine_efficiency, run_case  # noqa: E402
 
+import dpm  # noqa: E402
+
 #: sweep name -> (parameter shown on the x axis, [(x, case changes)], thesis points)
 SWEEPS: dict[str, tuple[str, list[tuple[float, dict]], dict[float, float]]] = {
     "rpm": ("machine speed [rpm]",
@@ -123,6 +125,10 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--quick", action="store_true",
                    help="two cases of 0.3 s with 150 particles (a check that it runs)")
     p.add_argument("--output", default="screening_study", help="output stem (.json, .png)")
+    if dpm.parallel.launched_ranks() > 1:  # (every rank would run every case, in pools)
+        raise SystemExit("screening_study.py runs its cases in a process pool of its own "
+                         "(--jobs): start it without mpiexec; under mpiexec, run one case "
+                         "with screening_machine.py")
     p.add_argument("--replot", action="store_true",
                    help="recompute the figures from the output's JSON and redraw (no runs)")
     args = p.parse_args(argv)

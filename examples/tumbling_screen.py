@@ -84,11 +84,11 @@ def main(argv: list[str] | None = None) -> None:
     wall = time.perf_counter() - t0
     sim.close()
     r = report(sim)
-    print(f"simulated {sim.time:.2f} s in {wall:.1f} s; fed {r['fed']} particles")
-    print(f"fines passed {r['fines_passed']} of {r['fines_fed']} fed: screening efficiency "
-          f"{100 * r['efficiency']:.1f} %; oversize passed: {r['oversize_passed']}")
-    print(f"barrel drive power {sim.barrel.power() + sim.screen.power():.3g} W; "
-          f"output: {args.output}")
+    dpm.notice(f"simulated {sim.time:.2f} s in {wall:.1f} s; fed {r['fed']} particles")
+    dpm.notice(f"fines passed {r['fines_passed']} of {r['fines_fed']} fed: screening efficiency "
+               f"{100 * r['efficiency']:.1f} %; oversize passed: {r['oversize_passed']}")
+    dpm.notice(f"barrel drive power {sim.barrel.power() + sim.screen.power():.3g} W; "
+               f"output: {args.output}")
 
 
 if __name__ == "__main__":

@@ -487,3 +487,14 @@ def test_gather_messages_round_trip_exactly():
         np.testing.assert_array_equal(got.key[:m], ref.key[:m])
         np.testing.assert_array_equal(got.history[:m], ref.history[:m])
         np.testing.assert_array_equal(got.active[:m], ref.active[:m])
+
+
+@needs_mpi
+def test_notice_prints_once_and_one_rank_writes(tmp_path):
+    """A script's messages (``dpm.notice``) appear once under mpiexec and its own files
+    are written by one rank (``dpm.is_root``), while plain print runs on every rank."""
+    stdout = mpirun(3, str(tmp_path), script=HERE / "scripts" / "rank_notice.py")
+    assert stdout.count("notice from | the script") == 1, stdout
+    assert sorted(line for line in stdout.splitlines() if line.startswith("print from")) == [
+        "print from rank 0", "print from rank 1", "print from rank 2"]
+    assert (tmp_path / "summary.txt").read_text() == "written by rank 0\n"

@@ -12,6 +12,7 @@ with an MPI plugin that sets one of them (``srun --mpi=pmi2`` sets ``PMI_SIZE``)
 from __future__ import annotations
 
 import os
+from typing import TextIO
 
 #: environment variables in which MPI launchers give the number of ranks
 SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "MV2_COMM_WORLD_SIZE", "PMIX_SIZE")
@@ -44,4 +45,22 @@ def rank() -> int:
     return int(MPI.COMM_WORLD.Get_rank())
 
 
-__all__ = ["default_device", "launched_ranks", "rank"]
+def is_root() -> bool:
+    """True in the process that prints and writes a script's own files: rank 0 under an
+    MPI launcher, the only process otherwise. Every rank runs the whole script and holds
+    the whole result after a run (``sim.bodies`` is gathered), so a script that writes a
+    JSON summary or a plot guards the write with it: ``if dpm.is_root(): ...``. (The
+    run's own output, ``sim.output``, is written by one writer already.)"""
+    return rank() == 0
+
+
+def notice(*objects: object, sep: str = " ", end: str = "\n", file: TextIO | None = None,
+           flush: bool = False) -> None:
+    """:func:`print` on rank 0 only (as HOOMD-blue's ``Device.notice``): a script's
+    messages appear once under ``mpiexec -n 4``, as in a serial run. The arguments are
+    print's."""
+    if is_root():
+        print(*objects, sep=sep, end=end, file=file, flush=flush)
+
+
+__all__ = ["default_device", "is_root", "launched_ranks", "notice", "rank"]
