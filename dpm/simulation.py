@@ -197,6 +197,7 @@ class Simulation:
         self._next_output = 0
         self._flow_every = 0
         self._next_flow = 0
+        self._next_sort = 0
         #: periodic checkpoints (:meth:`checkpoint_every`), None when off
         self._checkpoints = None
         #: scheduled boundary switches (:mod:`dpm.switches`), by time
@@ -892,6 +893,11 @@ class Simulation:
         self._schedule_flows()
         if self._switches:
             switches.apply_due(self)  # (dt may have changed since they were scheduled)
+        sorts = getattr(self.backend, "sorts", lambda: False)()
+        if sorts:  # (steps counted from 0: the same checks whatever the runs' lengths)
+            from .backends.cpu import SORT_CHECK_STEPS
+
+            self._next_sort = (self.step_count // SORT_CHECK_STEPS + 1) * SORT_CHECK_STEPS
         done = 0
         chunk = self._first_chunk()
         if hasattr(self.backend, "agree_chunk"):
@@ -901,7 +907,7 @@ class Simulation:
                 n = min(nsteps - done, chunk)
                 if per_step_hooks:
                     n = 1
-                for due in self._due_steps():
+                for due in self._due_steps() + ([self._next_sort] if sorts else []):
                     n = min(n, due - self.step_count)
                 if per_step_hooks:
                     call_hook(self._registry, "dpm_before_step", sim=self)
@@ -911,6 +917,9 @@ class Simulation:
                 done += ran
                 if per_step_hooks:
                     call_hook(self._registry, "dpm_after_step", sim=self)
+                if sorts and self.step_count >= self._next_sort:
+                    self._next_sort += SORT_CHECK_STEPS
+                    self.backend.sort_due()
                 if self._flow_every and self.step_count >= self._next_flow:
                     self._next_flow += self._flow_every
                     population.flow_event(self)

@@ -189,13 +189,14 @@ def test_renumbering_in_cell_order_changes_only_rounding():
 
 def test_large_scenes_are_renumbered_by_default():
     from dpm.backends import CpuBackend
-    from dpm.backends.cpu import SMALL_SCENE, SORT_EVERY
+    from dpm.backends.cpu import SORT_EVERY, SORT_FROM
 
     auto = CpuBackend()
-    assert auto.sort_interval(SMALL_SCENE - 1) == 0
-    assert auto.sort_interval(SMALL_SCENE) == SORT_EVERY > 0
+    assert auto.sort_interval(SORT_FROM - 1) == 0
+    assert auto.sort_interval(SORT_FROM) == SORT_EVERY > 0
     assert CpuBackend(sort_every=0).sort_interval(10**6) == 0
     assert CpuBackend(sort_every=3).sort_interval(10) == 3
     for bad in (-1, 2.5, True, "20"):
         with pytest.raises(dpm.ParameterError, match="sort_every"):
             CpuBackend(sort_every=bad)
+

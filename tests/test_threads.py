@@ -202,3 +202,25 @@ def test_dpm_puts_openmp_first_in_a_fresh_process():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=env, check=True)
     assert out.stdout.split()[-1] == "omp", out
+
+
+def test_renumbering_does_not_depend_on_how_a_run_is_split():
+    """A scene of spheres and clustered bodies renumbered in cell order every 2 rebuilds,
+    run as one run of 3,000 steps and as twelve of 250: the renumberings are decided at
+    the same steps (``SORT_CHECK_STEPS``), not after whichever time-sized kernel call
+    ended first, so both end bit for bit alike. (Decided after every call, as before,
+    they differ in the last bits.)"""
+    from dpm.backends.cpu import SORT_CHECK_STEPS
+
+    assert SORT_CHECK_STEPS <= 1500
+    whole = _scene(1, clusters=True)
+    whole.backend.sort_every = 2
+    whole.run(steps=3000, progress=False)
+    parts = _scene(1, clusters=True)
+    parts.backend.sort_every = 2
+    for _ in range(12):
+        parts.run(steps=250, progress=False)
+    assert np.any(whole.bodies.id != np.arange(len(whole.bodies)))  # it did renumber
+    np.testing.assert_array_equal(parts.bodies.id, whole.bodies.id)
+    for a, b in zip(_state(whole), _state(parts), strict=True):
+        np.testing.assert_array_equal(a, b)

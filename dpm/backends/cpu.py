@@ -35,11 +35,20 @@ from .records import (
 #: scenes with fewer elements run on one thread unless ``threads`` is given
 SMALL_SCENE = 4000
 #: list rebuilds between renumberings of the bodies in cell order, by default, for scenes
-#: of at least ``SMALL_SCENE`` elements: bodies inserted or mixed out of order (an inlet,
+#: of at least ``SORT_FROM`` elements: bodies inserted or mixed out of order (an inlet,
 #: a LIGGGHTS start, a drum) put a body's partners far apart in memory, which cost a
 #: settled bed of 2,000 clusters 1.34x on two threads against 1.91x in cell order
 #: (benchmarks/NOTES.md row 41)
 SORT_EVERY = 20
+#: the smallest scene renumbered by default (below it the scene sits in the caches; a
+#: shuffled box of 3,375 spheres ran 0.94 of its lattice order, and renumbered 0.95:
+#: NOTES row 64)
+SORT_FROM = SMALL_SCENE
+#: the renumbering is decided every ``SORT_CHECK_STEPS`` steps of a run, a kernel call
+#: ending there (:meth:`CpuBackend.sort_due`): a decision at whatever step a time-sized
+#: call happened to end would make the order of the sums, and so a run's round-off,
+#: depend on the machine's speed
+SORT_CHECK_STEPS = 1000
 #: the force forms (``force_pass``)
 FORCE_PASSES = ("auto", "fused", "two_pass")
 
@@ -112,10 +121,12 @@ class CpuBackend:
         comparisons and profiles: the sums are the same bit for bit). May be changed
         between runs.
     sort_every : int, optional
-        Renumber the bodies in the order of the contact-search cells they lie in after
-        every ``sort_every`` list rebuilds (0: never), so that neighbours sit close in
-        memory (:meth:`sort_by_cell`). Default: every ``SORT_EVERY`` (20) rebuilds in
-        scenes of at least ``SMALL_SCENE`` elements, never in smaller ones. Rows of
+        Renumber the bodies in the order of the contact-search cells they lie in once
+        ``sort_every`` list rebuilds have passed (0: never), so that neighbours sit close
+        in memory (:meth:`sort_by_cell`), decided every ``SORT_CHECK_STEPS`` (1,000)
+        steps, so that every run of a scene renumbers at the same steps. Default: 20
+        rebuilds (``SORT_EVERY``) in scenes of at least ``SORT_FROM`` (4,000) elements,
+        never in smaller ones. Rows of
         ``sim.bodies`` then change order (ids do not: find a body by its id); the sums
         of a body's forces may change by rounding.
     kernels : {"auto", "scene", "universal"}, optional
@@ -144,7 +155,7 @@ class CpuBackend:
                                        and not isinstance(sort_every, bool)
                                        and sort_every >= 0)):
             raise ParameterError(f"CpuBackend(): sort_every={sort_every!r} must be None "
-                                 f"(every {SORT_EVERY} rebuilds from {SMALL_SCENE} "
+                                 f"(every {SORT_EVERY} rebuilds from {SORT_FROM} "
                                  "elements, else never) or an integer >= 0 (0: never)")
         self.threads = threads
         self.force_pass = force_pass
@@ -377,21 +388,33 @@ class CpuBackend:
         d[1] = ran
         self._after_call()
         out = self._result(ran)
-        every = self.sort_interval(len(self.sim.elements))
-        if every:
-            self._rebuilds_since_sort += out.rebuilds
-            if self._rebuilds_since_sort >= every:
-                self.sort_by_cell()
+        self._rebuilds_since_sort += out.rebuilds
         return out
+
+    def sorts(self) -> bool:
+        """Whether this run renumbers its bodies by default (:meth:`sort_interval`):
+        :class:`dpm.Simulation` then ends a kernel call every ``SORT_CHECK_STEPS`` steps
+        and calls :meth:`sort_due` there."""
+        return self.sort_interval(len(self.sim.elements)) > 0
+
+    def sort_due(self) -> None:
+        """At a multiple of ``SORT_CHECK_STEPS`` steps: renumber in cell order if
+        ``sort_interval`` rebuilds have passed since the last renumbering. Both the
+        steps and the rebuild counts are the run's own, not the calls', so the
+        renumberings, and with them the round-off, are the same in every run of a
+        scene, on any number of threads."""
+        every = self.sort_interval(len(self.sim.elements))
+        if every and self._rebuilds_since_sort >= every:
+            self.sort_by_cell()
 
     def sort_interval(self, n_elements: int) -> int:
         """List rebuilds between renumberings in cell order for a scene of
         ``n_elements`` elements (0: never): ``sort_every`` if given, else ``SORT_EVERY``
-        from ``SMALL_SCENE`` elements (as LIGGGHTS' ``atom_modify sort``, on by default)
+        from ``SORT_FROM`` elements (as LIGGGHTS' ``atom_modify sort``, on by default)
         and never below, where the whole scene sits in the caches."""
         if self.sort_every is not None:
             return int(self.sort_every)
-        return SORT_EVERY if n_elements >= SMALL_SCENE else 0
+        return SORT_EVERY if n_elements >= SORT_FROM else 0
 
     def sort_by_cell(self) -> None:
         """Renumber the bodies in the order of the cell (half the contact-search cell,

@@ -528,6 +528,10 @@ class CudaBackend(CpuBackend):
     def _write_state(self, st: np.ndarray) -> None:
         self._dev["state"].copy_to_device(st)
 
+    def sorts(self) -> bool:
+        """No renumbering on the device (its lists sort their own rows)."""
+        return False
+
     def advance(self, n: int, dt: float, frames: np.ndarray) -> StepResult:
         """``n`` steps on the device (fewer when a status stops them); the host state is
         downloaded at the end (the lists too unless ``sync_lists`` is False)."""

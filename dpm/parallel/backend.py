@@ -296,6 +296,11 @@ class MpiBackend(CpuBackend):
             self._host_copy, strict=True))
 
     # ------------------------------------------------------------------ the steps
+    def sorts(self) -> bool:
+        """Across ranks no renumbering in cell order (each migration lays a rank's rows
+        out anew); on one rank as :class:`CpuBackend`."""
+        return self.ranks == 1 and super().sorts()
+
     def advance(self, n: int, dt: float, frames: np.ndarray) -> StepResult:
         if self.ranks == 1:
             return super().advance(n, dt, frames)
