@@ -1,7 +1,8 @@
 """A scene with everything a checkpoint must carry, run in a process of its own by
 tests/test_checkpoint.py: clustered bodies (cylinders) in a box, spheres and cylinders fed
 by an inlet (a size range, random orientations), an outlet in a floor corner, a rotating
-triangle-mesh paddle, the Gear integrator, output frames and periodic checkpoints.
+triangle-mesh paddle, the Gear integrator, output frames and periodic checkpoints, bodies
+renumbered in cell order.
 
     python restart_scene.py DIR full STEPS           one uninterrupted run
     python restart_scene.py DIR start STEPS          run with checkpoints every CK steps
@@ -21,13 +22,17 @@ import numpy as np
 import trimesh
 
 import dpm
+from dpm.backends import CpuBackend
 
 CK = 150  # steps between checkpoints (start/resume)
 FRAME = 100  # steps between output frames
 
 
 def scene(out: Path | None) -> dpm.Simulation:
-    sim = dpm.Simulation(dt=2e-5, gravity=(0, 0, -9.81), integrator="gear4", dt_check="warn")
+    # (renumbered in cell order every 2 rebuilds, decided every 1,000 steps: a restart
+    # must renumber at the same steps as the uninterrupted run)
+    sim = dpm.Simulation(dt=2e-5, gravity=(0, 0, -9.81), integrator="gear4", dt_check="warn",
+                         device=CpuBackend(sort_every=2))
     glass = dpm.Material("glass", density=2500, young=5e6, poisson=0.45)
     steel = dpm.Material("steel", density=7800, young=2e8, poisson=0.3)
     sim.contact(glass, glass, model="hertz_mindlin", restitution=0.3, friction=0.5)
