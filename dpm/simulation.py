@@ -893,11 +893,7 @@ class Simulation:
         self._schedule_flows()
         if self._switches:
             switches.apply_due(self)  # (dt may have changed since they were scheduled)
-        sorts = getattr(self.backend, "sorts", lambda: False)()
-        if sorts:  # (steps counted from 0: the same checks whatever the runs' lengths)
-            from .backends.cpu import SORT_CHECK_STEPS
-
-            self._next_sort = (self.step_count // SORT_CHECK_STEPS + 1) * SORT_CHECK_STEPS
+        sorts = self._schedule_sort()
         done = 0
         chunk = self._first_chunk()
         if hasattr(self.backend, "agree_chunk"):
@@ -918,11 +914,12 @@ class Simulation:
                 if per_step_hooks:
                     call_hook(self._registry, "dpm_after_step", sim=self)
                 if sorts and self.step_count >= self._next_sort:
-                    self._next_sort += SORT_CHECK_STEPS
                     self.backend.sort_due()
+                    sorts = self._schedule_sort()
                 if self._flow_every and self.step_count >= self._next_flow:
                     self._next_flow += self._flow_every
                     population.flow_event(self)
+                    sorts = self._schedule_sort()  # (an inlet may grow the scene past it)
                 if self._writer is not None and self.step_count >= self._next_output:
                     self._next_output += self._output_every
                     self._write_frame()
@@ -948,6 +945,18 @@ class Simulation:
             if self._writer is not None:
                 self._writer.flush()
 
+
+    def _schedule_sort(self) -> bool:
+        """Whether the backend renumbers this scene in cell order (``backend.sorts()``);
+        if so, the next multiple of ``SORT_CHECK_STEPS`` steps (counted from step 0: the
+        same steps however the run is split) becomes an event at which a kernel call ends
+        and ``backend.sort_due()`` decides."""
+        if not getattr(self.backend, "sorts", lambda: False)():
+            return False
+        from .backends.cpu import SORT_CHECK_STEPS
+
+        self._next_sort = (self.step_count // SORT_CHECK_STEPS + 1) * SORT_CHECK_STEPS
+        return True
 
     def _call_aim(self) -> float:
         return max(getattr(self.backend, "call_aim", 0.1), 100.0 * self._check_cost)

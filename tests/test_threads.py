@@ -224,3 +224,23 @@ def test_renumbering_does_not_depend_on_how_a_run_is_split():
     np.testing.assert_array_equal(parts.bodies.id, whole.bodies.id)
     for a, b in zip(_state(whole), _state(parts), strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_a_scene_an_inlet_grows_past_sort_from_is_renumbered_in_the_same_run(monkeypatch):
+    """The renumbering follows the scene's size as the thread count does: 4 spheres, then
+    an inlet brings 5,000 falling ones (past ``SORT_FROM``) within one run, which then
+    renumbers them in cell order at its next check."""
+    from dpm.backends import cpu
+
+    monkeypatch.setattr(cpu, "SORT_EVERY", 1)  # (a renumbering at the first check)
+    sim = dpm.Simulation(dt=1e-5, gravity=(0, 0, -9.81), dt_check="off", threads=1)
+    steel = dpm.Material("steel", density=7800, young=2e8, poisson=0.3)
+    sim.contact(steel, steel, model="hertz_mindlin", restitution=0.6, friction=0.4)
+    sim.add_particles("sphere", material=steel, radius=5e-4,
+                      positions=dpm.lattice((0, 0, 0), (4e-3, 4e-3, 2e-3), 2e-3))
+    sim.add_inlet(dpm.BoxRegion((0.0, 0.0, 0.01), (0.1, 0.1, 0.11)), steel, rate=5e6,
+                  radius=5e-4, every=1e-3, start=1e-3, stop=2e-3, seed=4,
+                  velocity=(0.0, 0.0, -1.0))
+    sim.run(steps=cpu.SORT_CHECK_STEPS + 10, progress=False)
+    assert len(sim.elements) == 5004 >= cpu.SORT_FROM
+    assert np.any(np.diff(sim.bodies.id) < 0)  # renumbered (an inlet appends in id order)
