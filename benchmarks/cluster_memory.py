@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import resource
 import shutil
@@ -45,7 +46,7 @@ import clusters_settle as cs  # noqa: E402
 
 def side_for(n: int) -> float:
     """A square floor that keeps the insertion region about as tall as it is wide."""
-    return max(0.03, (n * 4 / 3 * 3.1416 * (cs.R_BOUND + 2e-4) ** 3 / cs.INSERT_FRACTION)
+    return max(0.03, (n * 4 / 3 * math.pi * (cs.R_BOUND + 2e-4) ** 3 / cs.INSERT_FRACTION)
                ** (1 / 3))
 
 

@@ -197,7 +197,8 @@ class Simulation:
         self._next_output = 0
         self._flow_every = 0
         self._next_flow = 0
-        self._next_sort = 0
+        #: the step of the next renumbering check, None while the backend renumbers not
+        self._next_sort: int | None = None
         #: periodic checkpoints (:meth:`checkpoint_every`), None when off
         self._checkpoints = None
         #: scheduled boundary switches (:mod:`dpm.switches`), by time
@@ -893,7 +894,7 @@ class Simulation:
         self._schedule_flows()
         if self._switches:
             switches.apply_due(self)  # (dt may have changed since they were scheduled)
-        sorts = self._schedule_sort()
+        self._schedule_sort()
         done = 0
         chunk = self._first_chunk()
         if hasattr(self.backend, "agree_chunk"):
@@ -903,7 +904,7 @@ class Simulation:
                 n = min(nsteps - done, chunk)
                 if per_step_hooks:
                     n = 1
-                for due in self._due_steps() + ([self._next_sort] if sorts else []):
+                for due in self._due_steps():
                     n = min(n, due - self.step_count)
                 if per_step_hooks:
                     call_hook(self._registry, "dpm_before_step", sim=self)
@@ -913,13 +914,13 @@ class Simulation:
                 done += ran
                 if per_step_hooks:
                     call_hook(self._registry, "dpm_after_step", sim=self)
-                if sorts and self.step_count >= self._next_sort:
+                if self._next_sort is not None and self.step_count >= self._next_sort:
                     self.backend.sort_due()
-                    sorts = self._schedule_sort()
+                    self._schedule_sort()
                 if self._flow_every and self.step_count >= self._next_flow:
                     self._next_flow += self._flow_every
                     population.flow_event(self)
-                    sorts = self._schedule_sort()  # (an inlet may grow the scene past it)
+                    self._schedule_sort()  # (an inlet may grow the scene past SORT_FROM)
                 if self._writer is not None and self.step_count >= self._next_output:
                     self._next_output += self._output_every
                     self._write_frame()
@@ -946,17 +947,16 @@ class Simulation:
                 self._writer.flush()
 
 
-    def _schedule_sort(self) -> bool:
-        """Whether the backend renumbers this scene in cell order (``backend.sorts()``);
-        if so, the next multiple of ``SORT_CHECK_STEPS`` steps (counted from step 0: the
-        same steps however the run is split) becomes an event at which a kernel call ends
-        and ``backend.sort_due()`` decides."""
-        if not getattr(self.backend, "sorts", lambda: False)():
-            return False
-        from .backends.cpu import SORT_CHECK_STEPS
+    def _schedule_sort(self) -> None:
+        """If the backend renumbers this scene in cell order (``backend.sorts()``), the
+        next multiple of ``SORT_CHECK_STEPS`` steps (counted from step 0: the same steps
+        however the run is split) becomes an event (:meth:`_due_steps`) at which a kernel
+        call ends and ``backend.sort_due()`` decides; else none."""
+        self._next_sort = None
+        if getattr(self.backend, "sorts", lambda: False)():
+            from .backends.cpu import SORT_CHECK_STEPS
 
-        self._next_sort = (self.step_count // SORT_CHECK_STEPS + 1) * SORT_CHECK_STEPS
-        return True
+            self._next_sort = (self.step_count // SORT_CHECK_STEPS + 1) * SORT_CHECK_STEPS
 
     def _call_aim(self) -> float:
         return max(getattr(self.backend, "call_aim", 0.1), 100.0 * self._check_cost)
@@ -994,6 +994,8 @@ class Simulation:
             due.append(self._checkpoints.next_step)
         if self._switches:
             due.append(switches.next_step(self))
+        if self._next_sort is not None:
+            due.append(self._next_sort)
         return due
 
     def _advance(self, n: int) -> int:
