@@ -13,7 +13,8 @@ Per step, on each of P ranks holding n = N / P particles (box_settle-like packin
                                            message calls), m messages of B bytes in all
                                            (13 floats per ghost), alpha latency, beta
                                            bandwidth of the interconnect
-    reduce   = 2 * alpha_r * log2(P)       the two per-step Allreduces
+    reduce   = alpha_r * log2(P)           the per-step vote (posted with the halo,
+                                           counted whole as if not overlapped)
     migrate  = mu * n / r                  mu: cost per particle of a rebuild's
                                            migration, r: steps between rebuilds
     gather   = sigma * N / s               sigma: cost per particle of the whole-state
@@ -81,7 +82,7 @@ def step_time(cal: dict, N: float, P: int) -> dict:
     compute = cal["c_s"] * n * (1 + g)
     halo = (cal["overhead_per_step_s"] + NEIGHBOURS_3D * ALPHA
             + 2 * g * n * FLOATS_PER_GHOST * 8 / BETA)
-    reduce = 2 * ALPHA_R * math.log2(P)
+    reduce = ALPHA_R * math.log2(P)
     migrate = cal["migrate_per_particle_s"] * n / cal["steps_per_rebuild"]
     base = compute + halo + reduce + migrate
     gather_call = cal["gather_per_particle_s"] * N

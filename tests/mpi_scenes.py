@@ -23,6 +23,9 @@ Scenes:
 - ``gather``: spheres pulled into one corner of a box by a slanted gravity: the cut
   follows them.
 - ``sticky``: JKR contacts kept beyond touching across x = 0 (the ghost layer's reach).
+- ``crash``: two spheres meeting head-on across x = 0 too fast for the overlap limit,
+  beside spheres resting on the floor: the run stops on every rank at the serial step
+  with the serial diagnosis (the driver records the step and the message).
 """
 
 from __future__ import annotations
@@ -200,8 +203,24 @@ def sticky(kind: str):
     return sim, 3000
 
 
+def crash(kind: str):
+    """Spheres resting on a floor on both sides of x = 0, and two meeting head-on across
+    it at 1.5 m/s each: their overlap passes ``max_overlap`` (3 % of the radius) after
+    some 150 steps, on both ranks at once (the pair's elements are owned one a side)."""
+    sim, glass, steel = _sim(device(kind, True))
+    sim.max_overlap = 0.03
+    sim.add_boundary("plane", material=steel, point=(0, 0, 0), normal=(0, 0, 1))
+    r = 1e-3
+    rest = [[x, y, r - 1e-6] for x in (-6e-3, -3e-3, 3e-3, 6e-3) for y in (-4e-3, 4e-3)]
+    sim.add_particles("sphere", material=glass, positions=rest, radius=r)
+    sim.add_particles("sphere", material=glass, radius=r,
+                      positions=[[-r - 2e-3, 0.0, 5e-3], [r + 2e-3, 0.0, 5e-3]],
+                      velocities=[[1.5, 0.0, 0.0], [-1.5, 0.0, 0.0]])
+    return sim, 1000
+
+
 SCENES = {"settle": settle, "corner": corner, "slide": slide, "flow": flow,
-          "gather": gather, "sticky": sticky}
+          "gather": gather, "sticky": sticky, "crash": crash}
 
 
 def tilt_gravity(sim: dpm.Simulation) -> None:
@@ -235,6 +254,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rebalance", type=float, default=1.1)
     ap.add_argument("--output", default=None, help="also write the run to this HDF5 file")
     ap.add_argument("--calls", type=int, default=8, help="run the steps in this many calls")
+    ap.add_argument("--chunk", type=int, default=None, help="steps of each call instead")
     ap.add_argument("--call-aim", type=float, default=None,
                     help="seconds of work the MPI backend aims a kernel call at (a large "
                     "value: every sim.run one call)")
@@ -255,8 +275,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.call_aim is not None:
         sim.backend.CALL_AIM = sim.backend.CALL_AIM_MAX = args.call_aim
     per_call = []
+    stopped = (-1, "")
     done = 0
-    chunk = max(1, steps // args.calls)
+    chunk = args.chunk or max(1, steps // args.calls)
     t0 = time.perf_counter()
     while done < steps:
         k = min(chunk, steps - done)
@@ -264,7 +285,11 @@ def main(argv: list[str] | None = None) -> int:
             k = int(args.checkpoint[0]) - done
         if args.tilt_gravity and done >= steps // 2 and sim.gravity[0] == 0.0:
             tilt_gravity(sim)
-        sim.run(steps=k, progress=False)
+        try:
+            sim.run(steps=k, progress=False)
+        except dpm.UnstableRunError as exc:  # (the crash scene: recorded, not raised)
+            stopped = (sim.step_count, str(exc))
+            break
         done += k
         if args.checkpoint and sim.step_count == int(args.checkpoint[0]):
             sim.checkpoint(args.checkpoint[1])
@@ -283,6 +308,7 @@ def main(argv: list[str] | None = None) -> int:
     res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 6))
     res["wall_s"] = np.array(wall)
     res["loop_used"] = np.array(getattr(sim.backend, "loop_used", ""))
+    res["stopped_at"], res["stopped_why"] = np.array(stopped[0]), np.array(stopped[1])
     sim.close()
     if dpm.parallel.rank() == 0:
         np.savez(args.out, **res)

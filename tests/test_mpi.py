@@ -17,6 +17,7 @@ oversubscribed) against one process, under ``mpiexec`` (scenes in ``tests/mpi_sc
 - the migration and call-end messages (one float64 and one int64 buffer each) round-trip
   exactly: bodies with clustered elements, contact entries with their history (the pack
   and unpack functions called directly, no mpiexec);
+- an overlap past the limit stops every rank at the serial step with its diagnosis;
 - a serial run never imports mpi4py; unsupported requests are refused by name.
 """
 
@@ -142,6 +143,33 @@ def test_python_step_loop_matches_too(scene, tmp_path):
     got = parallel(scene, 2, tmp_path, env={"DPM_MPI_LOOP": "python"})
     assert str(got["loop_used"]) == "python"
     assert_same(serial(scene), got)
+
+
+@needs_mpi
+@pytest.mark.parametrize("loop,last", [("compiled", False), ("python", False),
+                                       ("compiled", True)])
+def test_an_overlap_past_the_limit_stops_every_rank_at_the_serial_step(loop, last,
+                                                                       tmp_path):
+    """Two spheres meet across the cut too fast for ``max_overlap``: on 2 ranks the run
+    stops at the step one process stops at, with its diagnosis (the overlap and the
+    particle). The ranks vote on a step's overlap together with the next step's rebuild
+    answer (one wait a step), so their failing state is that step's pre-force part
+    further on: the positions are not compared. ``last``: the failing step is the last
+    of a ``sim.run`` (its vote is the call's own, after the loop)."""
+    sim, steps = mpi_scenes.crash("cpu")
+    with pytest.raises(dpm.UnstableRunError) as err:
+        sim.run(steps=steps, progress=False)
+    ref_step = sim.step_count
+    assert 100 < ref_step < steps  # (it stops inside a call, after contact began)
+    got = parallel("crash", 2, tmp_path, *(["--chunk", str(ref_step)] if last else []),
+                   env={"DPM_MPI_LOOP": "python"} if loop == "python" else None)
+    assert str(got["loop_used"]) == loop
+    assert int(got["stopped_at"]) == ref_step
+    why, ref_why = str(got["stopped_why"]), str(err.value)
+    assert f"unstable run at step {ref_step} " in why
+    head = ref_why.split(" at particle")[0]  # ("... an overlap reached 0.0483 of ...")
+    assert "an overlap reached" in head and head in why
+    assert ref_why.split(" at particle")[1][:3] == why.split(" at particle")[1][:3]
 
 
 @needs_mpi

@@ -1,7 +1,7 @@
-"""MPI from compiled code: the few calls of a step (the two ``Allreduce`` of its flags and
-the halo's ``Isend``/``Irecv``/``Waitall``) as C functions that numba links by name, so
-that an MPI rank steps between list rebuilds without returning to Python
-(:func:`dpm.kernels.step.ranked_run`, :mod:`dpm.parallel.native`).
+"""MPI from compiled code: the few calls of a step (the ``Iallreduce`` of its flags and
+the halo's ``Isend``/``Irecv``, waited for together by ``Waitall``) as C functions that
+numba links by name, so that an MPI rank steps between list rebuilds without
+returning to Python (:func:`dpm.kernels.step.ranked_run`, :mod:`dpm.parallel.native`).
 
 The functions are declared by symbol (numba's ``ExternalFunction``), not through ctypes
 objects: code that calls them holds no process addresses and is cached like any step
@@ -27,9 +27,10 @@ H_COMM, H_DOUBLE, H_INT64, H_MAX, H_STATUS = 0, 1, 2, 3, 4
 HALO_TAG = 11
 
 _handle = types.intp
-mpi_allreduce = types.ExternalFunction(
-    "MPI_Allreduce",
-    types.int32(types.voidptr, types.voidptr, types.int32, _handle, _handle, _handle))
+mpi_iallreduce = types.ExternalFunction(
+    "MPI_Iallreduce",
+    types.int32(types.voidptr, types.voidptr, types.int32, _handle, _handle, _handle,
+                types.voidptr))
 mpi_isend = types.ExternalFunction(
     "MPI_Isend",
     types.int32(types.voidptr, types.int32, _handle, types.int32, types.int32, _handle,
@@ -43,26 +44,24 @@ mpi_waitall = types.ExternalFunction(
 mpi_wtime = types.ExternalFunction("MPI_Wtime", types.float64())
 
 #: the names :mod:`dpm.parallel.native` checks before compiled code may call them
-SYMBOLS = ("MPI_Allreduce", "MPI_Isend", "MPI_Irecv", "MPI_Waitall", "MPI_Wtime")
+SYMBOLS = ("MPI_Iallreduce", "MPI_Isend", "MPI_Irecv", "MPI_Waitall", "MPI_Wtime")
 
 
 @jit
-def allreduce_max(send, recv, h):
-    """recv = the element-wise maximum of ``send`` (int64) over the ranks; MPI's code."""
-    return mpi_allreduce(send.ctypes.data, recv.ctypes.data, np.int32(send.shape[0]),
-                         h[H_INT64], h[H_MAX], h[H_COMM])
-
-
-@jit
-def halo_messages(send_rank, send_off, sbuf, recv_rank, recv_off, rbuf, requests,
-                  statuses, h):
-    """One message of rows ``sbuf[send_off[k]:send_off[k + 1]]`` to each rank
-    ``send_rank[k]``, one into ``rbuf[recv_off[m]:recv_off[m + 1]]`` from each
-    ``recv_rank[m]`` (non-blocking, then waited for together); the first non-zero MPI
-    code, or 0."""
+def vote_and_halo(send_flags, recv_flags, send_rank, send_off, sbuf, recv_rank,
+                  recv_off, rbuf, requests, statuses, h):
+    """recv_flags = the element-wise maximum of ``send_flags`` (int64) over the ranks
+    (``Iallreduce``), with one message of rows ``sbuf[send_off[k]:send_off[k + 1]]`` to
+    each rank ``send_rank[k]`` and one into ``rbuf[recv_off[m]:recv_off[m + 1]]`` from
+    each ``recv_rank[m]``: all non-blocking, then waited for together (``requests`` and
+    ``statuses`` hold one more than the messages). One wait instead of two: the vote's
+    latency and the halo's overlap, and a rank slower than the others is waited for
+    once. Returns the first non-zero MPI code, or 0."""
     width = sbuf.shape[1]
-    n = 0
-    rc = 0
+    rc = mpi_iallreduce(send_flags.ctypes.data, recv_flags.ctypes.data,
+                        np.int32(send_flags.shape[0]), h[H_INT64], h[H_MAX], h[H_COMM],
+                        requests.ctypes.data)
+    n = 1
     for m in range(recv_rank.shape[0]):
         a, b = recv_off[m], recv_off[m + 1]
         r = mpi_irecv(rbuf[a:b].ctypes.data, np.int32((b - a) * width), h[H_DOUBLE],
@@ -77,7 +76,5 @@ def halo_messages(send_rank, send_off, sbuf, recv_rank, recv_off, rbuf, requests
                       requests[n:].ctypes.data)
         rc = rc if rc != 0 else r
         n += 1
-    if n > 0:
-        r = mpi_waitall(np.int32(n), requests.ctypes.data, statuses.ctypes.data)
-        rc = rc if rc != 0 else r
-    return rc
+    r = mpi_waitall(np.int32(n), requests.ctypes.data, statuses.ctypes.data)
+    return rc if rc != 0 else r

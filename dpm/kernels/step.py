@@ -47,7 +47,7 @@ from .neighbours import _copy_back as copy_back, _merge as merge_history
 from .neighbours import build_neighbour_list, minimum_image
 from .rigid_rotation import place_elements
 from .halo import pack_halo, unpack_halo
-from .mpi_calls import allreduce_max, halo_messages, mpi_wtime
+from .mpi_calls import mpi_wtime, vote_and_halo
 
 # --- bindings begin (dpm.plan rewrites this block) ---
 from .config import pair_row
@@ -1151,17 +1151,23 @@ def ranked_run(s0, n, dt, ctl, bodies, elems, pairs, walls, bnd, f_table, diag,
                recv_rank, recv_off, rbuf, requests, statuses, h, flags, acc):
     """Steps s0, s0 + 1, ... of one MPI rank with their messages, compiled (no Python
     between steps; :mod:`dpm.kernels.mpi_calls`), until step n or until a step needs
-    what only Python does. Each step: :func:`ranked_pre_force`; the ranks' NaN and
-    rebuild answers combined (``Allreduce``, MAX); the halo (owned rows
-    ``send_rows[send_off[k]:send_off[k + 1]]`` packed for rank ``send_rank[k]``; the
-    ghost rows from ``first_ghost`` on unpacked from ``rbuf``, the messages of
-    ``recv_rank`` in turn, elements placed with ``place``); :func:`ranked_forces`; the
-    overlap limit combined. Returns (the step it stopped at, why: ``RUN_DONE`` at n,
+    what only Python does. Each step: :func:`ranked_pre_force`; owned rows
+    ``send_rows[send_off[k]:send_off[k + 1]]`` packed for rank ``send_rank[k]``; then one
+    wait for three things at once (:func:`dpm.kernels.mpi_calls.vote_and_halo`): the
+    ranks' vote (``Iallreduce``, MAX) on this step's NaN and rebuild answers and on
+    whether the previous step's forces passed the overlap limit, and the halo messages;
+    the ghost rows from ``first_ghost`` on unpacked from ``rbuf`` (the messages of
+    ``recv_rank`` in turn, elements placed with ``place``); :func:`ranked_forces`. So a
+    step waits for the other ranks once, not three times (vote, halo, overlap vote).
+    ``flags[2]``: in, whether the step before ``s0`` passed the overlap limit on this
+    rank and has not been voted on; out (``RUN_DONE``), the same of step n - 1, for the
+    caller to vote on. Returns (the step it stopped at, why: ``RUN_DONE`` at n,
     ``RUN_REBUILD`` with that step's pre-force part done and a rebuild agreed,
-    ``RUN_NAN`` before it, ``RUN_OVERLAP`` after it: its forces done, ``RUN_MPI_ERROR``).
-    ``acc`` gathers seconds in the step kernels [0], in the rebuild vote and the halo [1]
-    (waits for slower ranks included), the largest overlap [2], and seconds in the
-    overlap vote [3] (a wait for the slowest rank's forces)."""
+    ``RUN_NAN`` before it, ``RUN_OVERLAP`` when step s - 1 passed the limit (its forces
+    done, s steps counted; step s's pre-force part done as well, the vote being folded
+    into step s's), ``RUN_MPI_ERROR``). ``acc`` gathers seconds in the step kernels [0],
+    in the vote and the halo [1] (waits for slower ranks included), the largest overlap
+    [2]; [3] stays (the overlap vote has no wait of its own)."""
     for s in range(s0, n):
         t0 = mpi_wtime()
         need = ranked_pre_force(dt, ctl, bodies, elems, bnd, f_table, s)
@@ -1169,28 +1175,23 @@ def ranked_run(s0, n, dt, ctl, bodies, elems, pairs, walls, bnd, f_table, diag,
         acc[0] += t1 - t0
         flags[0] = 1 if need < 0 else 0
         flags[1] = 1 if need > 0 else 0
-        if allreduce_max(flags[0:2], flags[3:5], h) != 0:
+        pack_halo(send_rows, bodies.pos, bodies.quat, bodies.vf, bodies.wf, sbuf)
+        if vote_and_halo(flags[0:3], flags[3:6], send_rank, send_off, sbuf, recv_rank,
+                         recv_off, rbuf, requests, statuses, h) != 0:
             return s, RUN_MPI_ERROR
+        t2 = mpi_wtime()
+        acc[1] += t2 - t1
+        if flags[5] != 0:
+            return s, RUN_OVERLAP
         if flags[3] != 0:
             return s, RUN_NAN
         if flags[4] != 0:
             return s, RUN_REBUILD
-        pack_halo(send_rows, bodies.pos, bodies.quat, bodies.vf, bodies.wf, sbuf)
-        if halo_messages(send_rank, send_off, sbuf, recv_rank, recv_off, rbuf, requests,
-                         statuses, h) != 0:
-            return s, RUN_MPI_ERROR
         unpack_halo(first_ghost, rbuf, bodies.pos, bodies.quat, bodies.vf, bodies.wf,
                     bodies.estart, elems.offset, elems.pos, place)
-        t2 = mpi_wtime()
-        acc[1] += t2 - t1
-        worst = ranked_forces(dt, ctl, bodies, elems, pairs, walls, bnd, diag)
         t3 = mpi_wtime()
-        acc[0] += t3 - t2
+        worst = ranked_forces(dt, ctl, bodies, elems, pairs, walls, bnd, diag)
+        acc[0] += mpi_wtime() - t3
         acc[2] = max(acc[2], worst)
         flags[2] = 1 if worst > max_overlap else 0
-        if allreduce_max(flags[2:3], flags[5:6], h) != 0:
-            return s + 1, RUN_MPI_ERROR
-        acc[3] += mpi_wtime() - t3
-        if flags[5] != 0:
-            return s + 1, RUN_OVERLAP
     return n, RUN_DONE

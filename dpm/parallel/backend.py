@@ -32,13 +32,15 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   its lists hold no pair of two ghosts and no boundary entry of a ghost (their owners
   compute those: the ghosts' forces come with the halo).
 - **Every step**: the integrator's pre-force part runs for owned bodies (only owners
-  integrate), the rebuild decision is collective (``Allreduce``), then each owner sends
-  what the force pass reads of its ghosts (position, quaternion, the velocities the
-  forces see: 13 floats a body) to the ranks holding them, which place the ghosts'
-  elements (LAMMPS' forward communication; one message per neighbour, mpi4py buffer
-  calls, ``Isend``/``Irecv``; rows packed and unpacked by numba kernels,
-  :mod:`dpm.kernels.halo`); forces and the post-force part run for owned bodies. At a
-  rebuild step the migration carries the ghosts' state instead. The steps between
+  integrate); the ranks vote on a NaN, a rebuild and the previous step's overlap limit
+  (collective) while each owner sends what the force pass reads of its ghosts
+  (position, quaternion, the velocities the forces see: 13 floats a body) to the ranks
+  holding them (LAMMPS' forward communication; one message per neighbour, ``Isend`` /
+  ``Irecv``; rows packed and unpacked by numba kernels, :mod:`dpm.kernels.halo`); one
+  wait for both; the ghosts place their elements; forces and the post-force part run
+  for owned bodies. At a rebuild step the migration carries the ghosts' state instead.
+  An overlap past ``max_overlap`` stops every rank at the serial step, with step
+  s + 1's pre-force part done too (its vote travels with that step's). The steps between
   rebuilds run as one compiled call with the MPI calls in it
   (:func:`dpm.kernels.step.ranked_run`, :mod:`dpm.kernels.mpi_calls`) where this MPI
   allows it (:mod:`dpm.parallel.native`; ``loop``), else from Python with mpi4py.
@@ -156,9 +158,10 @@ class MpiBackend(CpuBackend):
         self._comm = comm
         self._reset_local()
         #: figures of the last call on this rank: steps, seconds stepping (all of it), in
-        #: the step kernels (``work_s``), in the rebuild vote and the halo exchange (waits
-        #: included, ``halo_s``), in the overlap vote after the forces (``wait_s``: this
-        #: rank waiting for the slowest one's forces), migrating
+        #: the step kernels (``work_s``), in the step's one wait for the other ranks: the
+        #: vote (NaN, rebuild, the last step's overlap) with the halo exchange
+        #: (``halo_s``; it holds this rank's wait for the slowest one's forces too), in
+        #: the overlap vote of a call's last step (``wait_s``), migrating
         #: at rebuilds (the list rebuild included), gathering at the end,
         #: scattering at the start; owned bodies and ghosts; halo bytes sent per step
         self.timing: dict[str, float] = {}
@@ -349,6 +352,9 @@ class MpiBackend(CpuBackend):
         cpu_since, wall_since = time.process_time(), t_start
         inner.diag[4] = 0.0
         inner.diag[5] = -1
+        # this rank's last step passed the overlap limit (not yet voted on: the vote
+        # travels with the next step's, so that ranks wait for each other once a step)
+        late = 0
         rec = None
         h = self._native_handles()
         if h is not None:
@@ -380,12 +386,13 @@ class MpiBackend(CpuBackend):
                         hp["send_rows"], hp["send_rank"], hp["send_off"], hp["sbuf"],
                         hp["recv_rank"], hp["recv_off"], hp["rbuf"], hp["requests"],
                         statuses, h, flags6, acc)
+                flags6[2] = late
                 self._compile_in_turn(module.ranked_run, args)
                 s, why = module.ranked_run(*args)
+                late = int(flags6[2])
                 work += float(acc[0])
                 t_halo += float(acc[1])
                 worst_all = max(worst_all, float(acc[2]))
-                t_wait += float(acc[3])
                 if why == module.RUN_DONE:
                     break
                 if why == module.RUN_NAN:
@@ -404,9 +411,14 @@ class MpiBackend(CpuBackend):
                 work += clock() - t0
                 flags[0] = need < 0
                 flags[1] = need > 0
+                flags[2] = late  # (the last step's overlap, voted with this step's answers)
                 t0 = clock()
                 comm.Allreduce(flags, out, op=MPI.MAX)
                 t_halo += clock() - t0
+                late = 0
+                if out[2]:
+                    status = STATUS_OVERLAP
+                    break
                 if out[0]:
                     status = STATUS_NAN
                     break
@@ -437,13 +449,13 @@ class MpiBackend(CpuBackend):
             work += clock() - t0
             s += 1
             worst_all = max(worst_all, worst)
-            flags[2] = worst > loc.max_overlap
+            # (voted with the next step's answers: one wait a step for the other ranks)
+            late = int(worst > loc.max_overlap)
+        if status == STATUS_OK:  # the last step's overlap (every rank got here)
             t0 = clock()
-            comm.Allreduce(flags[2:], out[2:], op=MPI.MAX)
-            t_wait += clock() - t0
-            if out[2]:
+            if int(comm.allreduce(late, op=MPI.MAX)):
                 status = STATUS_OVERLAP
-                break
+            t_wait += clock() - t0
         ran = s
         t_steps = time.perf_counter() - t_start
         t_work += work
@@ -663,7 +675,8 @@ class MpiBackend(CpuBackend):
                     "sbuf": np.empty((len(s_rows), HALO_WIDTH)),
                     "recv_rank": r_rank, "recv_off": r_off.astype(np.int64),
                     "rbuf": np.empty((int(r_off[-1]), HALO_WIDTH)),
-                    "requests": np.zeros(len(s_rank) + len(r_rank), np.intp),
+                    # (one more: the compiled loop's vote waits with the messages)
+                    "requests": np.zeros(len(s_rank) + len(r_rank) + 1, np.intp),
                     "first": n_own}
 
     # ------------------------------------------------------------------ halo
