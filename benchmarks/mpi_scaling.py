@@ -182,7 +182,9 @@ def shares(res: dict) -> dict:
             for k in ("steps_s", "halo_s", "wait_s", "migrate_s", "gather_s", "scatter_s")}
     return {"halo_share": mean["halo_s"] / wall, "migrate_share": mean["migrate_s"] / wall,
             "gather_scatter_share": (mean["gather_s"] + mean["scatter_s"]) / wall,
-            # (the vote after the forces: a rank waiting for the slowest one's forces)
+            # (the overlap vote after a call's last step; until NOTES row 66 the vote after
+            # every step's forces, a rank waiting for the slowest one's forces, which now
+            # waits in the halo share: one wait a step, with the vote and the messages)
             "wait_share": mean["wait_s"] / wall,
             "compute_share": (mean["steps_s"] - mean["halo_s"] - mean["migrate_s"]
                               - mean["wait_s"]) / wall,
@@ -224,7 +226,9 @@ def plot(result: dict, path: Path) -> None:
     bottom = [0.0] * len(sizes)
     for part in parts:
         vals = [s.get("dpm_2_ranks_shares", {}).get(part, 0.0) for s in sizes]
-        axs[1].bar(range(len(sizes)), vals, bottom=bottom, label=part.replace("_share", ""))
+        lab = {"halo_share": "halo + vote (waits for the slower rank)",
+               "wait_share": "wait (overlap vote)"}.get(part, part.replace("_share", ""))
+        axs[1].bar(range(len(sizes)), vals, bottom=bottom, label=lab)
         bottom = [b + v for b, v in zip(bottom, vals, strict=True)]
     axs[1].set_xticks(range(len(sizes)), [f"{s['particles']:,}" for s in sizes])
     axs[1].set_ylabel("share of the 2-rank run's wall time (mean over ranks)")
