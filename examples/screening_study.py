@@ -117,6 +117,10 @@ def draw(results: dict, path: str) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
+    if dpm.parallel.launched_ranks() > 1:  # (every rank would run every case, in pools)
+        raise SystemExit("screening_study.py runs its cases in a process pool of its own "
+                         "(--jobs): start it without mpiexec; under mpiexec, run one case "
+                         "with screening_machine.py")
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sweeps", nargs="*", default=list(SWEEPS), help="which sweeps")
     p.add_argument("--until", type=float, default=20.0, help="simulated time per case [s]")
@@ -125,10 +129,6 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--quick", action="store_true",
                    help="two cases of 0.3 s with 150 particles (a check that it runs)")
     p.add_argument("--output", default="screening_study", help="output stem (.json, .png)")
-    if dpm.parallel.launched_ranks() > 1:  # (every rank would run every case, in pools)
-        raise SystemExit("screening_study.py runs its cases in a process pool of its own "
-                         "(--jobs): start it without mpiexec; under mpiexec, run one case "
-                         "with screening_machine.py")
     p.add_argument("--replot", action="store_true",
                    help="recompute the figures from the output's JSON and redraw (no runs)")
     args = p.parse_args(argv)

@@ -199,4 +199,3 @@ def test_large_scenes_are_renumbered_by_default():
     for bad in (-1, 2.5, True, "20"):
         with pytest.raises(dpm.ParameterError, match="sort_every"):
             CpuBackend(sort_every=bad)
-

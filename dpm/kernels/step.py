@@ -1167,7 +1167,7 @@ def ranked_run(s0, n, dt, ctl, bodies, elems, pairs, walls, bnd, f_table, diag,
     done, s steps counted; step s's pre-force part done as well, the vote being folded
     into step s's), ``RUN_MPI_ERROR``). ``acc`` gathers seconds in the step kernels [0],
     in the vote and the halo [1] (waits for slower ranks included), the largest overlap
-    [2]; [3] stays (the overlap vote has no wait of its own)."""
+    [2]."""
     for s in range(s0, n):
         t0 = mpi_wtime()
         need = ranked_pre_force(dt, ctl, bodies, elems, bnd, f_table, s)

@@ -358,7 +358,7 @@ class MpiBackend(CpuBackend):
         rec = None
         h = self._native_handles()
         if h is not None:
-            acc = np.zeros(4)
+            acc = np.zeros(3)
             flags6 = np.zeros(6, np.int64)
             statuses = np.zeros(0, np.uint8)
         s = 0
