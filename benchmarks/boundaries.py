@@ -8,7 +8,8 @@
 2. Meshes: flat floors of 2 to ~2e5 triangles (cells of 4 mm split in two, the floor grows
    with the count) under up to 2000 spheres (r = 2 mm) resting on it (no gravity, touching);
    and a second series, the same 2000 spheres on one 210 mm floor meshed by 200 to ~2e5
-   triangles (cells of 21 to 0.66 mm: a part's mesh resolution at a fixed scene).
+   triangles (cells of 21 to 0.66 mm: a part's mesh resolution at a fixed scene), timed on
+   one thread and on two.
    We time (a) the candidate search (counting pass of the grid search) per sphere and (b) the
    step (contact pass with the mesh edge rules, no rebuild) per sphere. With triangles of
    bounded size the grid makes both independent of the triangle count; the table also
@@ -20,7 +21,8 @@
    constants, dt, Verlet skin (0.4 mm) and number of steps, one core
    (benchmarks/scenes/mesh_floor). Its step
    time per sphere is the "Loop time" of the timed ``run`` (best of three) and the ratio
-   dpm / LIGGGHTS is reported per triangle count.
+   dpm / LIGGGHTS is reported per triangle count (for the fixed floor also dpm's two
+   threads over LIGGGHTS' one core).
 
 Run: ``python benchmarks/boundaries.py`` (writes benchmarks/results/boundaries.json and
 .png; ``--quick`` uses fewer sizes, ``--no-liggghts`` skips the peer).
@@ -166,11 +168,29 @@ def run_liggghts(verts, faces, pos, steps: int, repeats: int = 3) -> dict | None
             "step_us_per_sphere": min(loops) / steps / len(pos) * 1e6}
 
 
+def best_steps(sim, nsteps: int) -> float:
+    """Best wall time of three runs of ``nsteps`` steps with no list rebuild (after five
+    untimed steps)."""
+    sim.run(steps=5, progress=False)
+    best = math.inf
+    for _ in range(3):
+        r0 = sim.rebuild_count
+        t1 = time.perf_counter()
+        sim.run(steps=nsteps, progress=False)
+        el = time.perf_counter() - t1
+        if sim.rebuild_count == r0:
+            best = min(best, el)
+    return best
+
+
 def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000, sphere_steps: float = 1e6,
-                 liggghts: bool = False, side: float | None = None) -> list[dict]:
+                 liggghts: bool = False, side: float | None = None,
+                 two_threads: bool = False) -> list[dict]:
     """Rows of the floor of m x m cells for m in ``sizes``: cells of 4 mm (the floor
     grows with m and holds up to ``n_spheres``), or, with ``side``, a floor of that side
-    whatever m (the same spheres on a coarser or finer mesh of the same floor)."""
+    whatever m (the same spheres on a coarser or finer mesh of the same floor).
+    ``two_threads``: time the steps on two threads too (the LIGGGHTS peer stays on one
+    core: the ratio is dpm's two threads against its one core)."""
     rows = []
     for m in sizes:
         cell = 4e-3 if side is None else side / m
@@ -216,21 +236,20 @@ def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000, sphere_steps: 
         # (b) steps without rebuild (the spheres barely move); at least 1e6 sphere-steps
         # per timing (few spheres: many steps), so that each lasts ~0.2 s or more
         nsteps = int(min(100000, max(steps, sphere_steps / len(pos))))
-        sim.run(steps=5, progress=False)
-        best = math.inf
-        for _ in range(3):
-            r0 = sim.rebuild_count
-            t1 = time.perf_counter()
-            sim.run(steps=nsteps, progress=False)
-            el = time.perf_counter() - t1
-            if sim.rebuild_count == r0:
-                best = min(best, el)
+        best = best_steps(sim, nsteps)
         entries = int(sim.wall_contacts.count)
         rows.append(dict(triangles=len(faces), spheres=len(pos), cell_m=cell,
                          floor_m=m * cell, prepare_s=prep,
                          rebuild_us_per_sphere=rebuild * 1e6,
                          step_us_per_sphere=best / nsteps / len(pos) * 1e6, steps=nsteps,
                          candidates_per_sphere=entries / len(pos)))
+        if two_threads:
+            # the same steps on two threads (sim.threads: the parallel form of the step
+            # module; the same bits), best of three again
+            sim.threads = 2
+            best2 = best_steps(sim, nsteps)
+            rows[-1].update(step_us_per_sphere_2_threads=best2 / nsteps / len(pos) * 1e6,
+                            two_thread_gain=best / best2)
         if liggghts:
             lg = run_liggghts(verts, faces, pos, nsteps)
             if lg:
@@ -239,6 +258,9 @@ def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000, sphere_steps: 
                                 liggghts_neighbor_builds=lg["neighbor_builds"],
                                 ratio_dpm_over_liggghts=rows[-1]["step_us_per_sphere"]
                                 / lg["step_us_per_sphere"])
+                if two_threads:  # (time ratio, as the one above)
+                    rows[-1]["ratio_dpm_2_threads_over_liggghts"] = (
+                        rows[-1]["step_us_per_sphere_2_threads"] / lg["step_us_per_sphere"])
         print(rows[-1], flush=True)
     return rows
 
@@ -322,8 +344,11 @@ def main() -> None:
     res["mesh"] = mesh_scaling(sizes, liggghts=not args.no_liggghts)
     # the same 2,000 spheres on one floor (a little wider than the lattice they rest on)
     # meshed by 200 to ~2e5 triangles: a CAD part's mesh resolution at a fixed scene
+    # (two threads here only: the growing floor holds 1 to 841 spheres below 20,000
+    # triangles, too few bodies for a second thread to pay in any code)
     res["mesh_fixed_floor"] = mesh_scaling([10, 32, 100, 316] if not args.quick else [10],
-                                           liggghts=not args.no_liggghts, side=FIXED_FLOOR)
+                                           liggghts=not args.no_liggghts, side=FIXED_FLOOR,
+                                           two_threads=True)
     res["liggghts"] = (None if args.no_liggghts or shutil.which("liggghts") is None else
                        subprocess.run(["liggghts", "-h"], capture_output=True, text=True)
                        .stdout.split("\n\n")[0].strip()[:120])

@@ -19,8 +19,10 @@ the defaults that differ): a small difference in the bounce off the chute.
 Compared: bodies inserted and bodies in the container against time; LIGGGHTS is run
 twice with different insertion seeds (its run-to-run spread), dpm once; speed is
 particle-steps per second over each code's whole loop on one core (dpm: after a warm-up
-run that compiles, so compile time is reported apart). The machine may be shared while
-this runs: the timings are noisy (stated in the JSON); the physics is what must agree.
+run that compiles, so compile time is reported apart), and dpm's on two threads
+(``sim.threads = 2``: the same counts bit for bit) against LIGGGHTS' one core. The machine
+may be shared while this runs: the timings are noisy (stated in the JSON); the physics is
+what must agree.
 
     python benchmarks/meshgran.py [--quick] [--no-liggghts]
 
@@ -153,16 +155,22 @@ def scene(folder: Path, t_insert: float, seed: int = 5330):
     return sim, inlet
 
 
-def run_dpm(t_insert: float, t_end: float) -> dict:
+def run_dpm(t_insert: float, t_end: float, threads: int = 1) -> dict:
+    """dpm's run on ``threads`` threads (``sim.threads``: a run's results are the same bit
+    for bit for any count, so the counts against time must match the one-thread run's)."""
     import numba
 
-    numba.set_num_threads(1)
+    import dpm  # noqa: F401  (first: it picks numba's OpenMP layer before any launch)
+
+    numba.set_num_threads(threads)
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         warm, _ = scene(Path(tmp), t_insert)  # compiles (or loads the cache)
+        warm.threads = threads
         warm.run(steps=2, progress=False)
         first = time.perf_counter() - t0
         sim, inlet = scene(Path(tmp), t_insert)
+        sim.threads = threads
         times, inserted, cont, bodies = [], [], [], []
         loop, psteps = 0.0, 0.0
         n_int = round(t_end / EVERY)
@@ -182,7 +190,7 @@ def run_dpm(t_insert: float, t_end: float) -> dict:
             if isinstance(getattr(sim, "escaped", None), dict) else None,
             "loop_s": loop, "particle_steps": psteps,
             "particle_steps_per_s": psteps / loop, "time_to_first_steps_s": first,
-            "skin": sim.skin}
+            "skin": sim.skin, "threads": threads}
 
 
 def run_liggghts(t_insert: float, t_end: float, skin: float, seed: int) -> dict | None:
@@ -271,6 +279,11 @@ def main(argv: list[str] | None = None) -> dict:
     d = run_dpm(t_insert, t_end)
     print(f"dpm: {d['inserted'][-1]} inserted, {d['in_container'][-1]} in the container, "
           f"{d['particle_steps_per_s']:.3g} particle-steps/s", flush=True)
+    d2 = run_dpm(t_insert, t_end, threads=2)
+    same = all(d2[k] == d[k] for k in ("inserted", "in_container", "bodies"))
+    print(f"dpm 2 threads: {d2['particle_steps_per_s']:.3g} particle-steps/s "
+          f"({d2['particle_steps_per_s'] / d['particle_steps_per_s']:.2f}x one thread; "
+          f"counts {'the same' if same else 'DIFFERENT'})", flush=True)
     runs = [] if a.no_liggghts else [
         r for r in (run_liggghts(t_insert, t_end, d["skin"], s) for s in (67867967, 86028121)) if r]
     result = {"scene": "meshGran tutorial port (own STL)", "quick": a.quick, "dt": DT,
@@ -278,17 +291,22 @@ def main(argv: list[str] | None = None) -> dict:
               "timing_note": "one core each; the machine was shared with other jobs while "
                              "this ran, so the timings are noisy; the physics is what "
                              "must agree",
-              "dpm": d, "liggghts": runs or None}
+              "dpm": d, "dpm_2_threads": d2, "two_thread_counts_identical": same,
+              "two_thread_gain": d2["particle_steps_per_s"] / d["particle_steps_per_s"],
+              "liggghts": runs or None}
     if runs:
         result["physics"] = compare(d, runs)
         lg = float(np.mean([r["particle_steps_per_s"] for r in runs]))
         result["speed_ratio_dpm_over_liggghts"] = d["particle_steps_per_s"] / lg
+        result["speed_ratio_dpm_2_threads_over_liggghts"] = d2["particle_steps_per_s"] / lg
         for r in runs:
             print(f"LIGGGHTS seed {r['seed']}: {r['inserted'][-1]} inserted, "
                   f"{r['in_container'][-1]} in the container, "
                   f"{r['particle_steps_per_s']:.3g} particle-steps/s")
         print(json.dumps(result["physics"], indent=1))
-        print(f"speed ratio dpm / LIGGGHTS {result['speed_ratio_dpm_over_liggghts']:.2f}")
+        print(f"speed ratio dpm / LIGGGHTS {result['speed_ratio_dpm_over_liggghts']:.2f}, "
+              f"dpm 2 threads / LIGGGHTS one core "
+              f"{result['speed_ratio_dpm_2_threads_over_liggghts']:.2f}")
     RESULTS.mkdir(exist_ok=True)
     stem = "meshgran_quick" if a.quick else "meshgran"
     (RESULTS / f"{stem}.json").write_text(json.dumps(result, indent=1))

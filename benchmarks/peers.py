@@ -85,7 +85,8 @@ def summarise(name: str, d: dict) -> list[dict]:
                      "physics": text, "file": src})
     elif name == "meshgran":
         rows.append({"scene": "meshGran (STL + stream)", "variant": "whole loop",
-                     "ratio_1": d.get("speed_ratio_dpm_over_liggghts"), "ratio_2": None,
+                     "ratio_1": d.get("speed_ratio_dpm_over_liggghts"),
+                     "ratio_2": d.get("speed_ratio_dpm_2_threads_over_liggghts"),
                      "physics": json.dumps(d.get("physics", {}))[:80], "file": src})
     elif name == "drum":
         sr = d.get("speed") or d.get("speed_ratios", {})  # (drum_peer.py writes "speed")
@@ -100,6 +101,15 @@ def summarise(name: str, d: dict) -> list[dict]:
             r = m.get("ratio_dpm_over_liggghts")  # (time ratio: invert to speed)
             rows.append({"scene": "mesh floor", "variant": f"{m['triangles']} triangles",
                          "ratio_1": (1.0 / r) if r else None, "ratio_2": None,
+                         "physics": "(speed only)", "file": src})
+        # the same 2,000 spheres on one floor meshed ever finer (timed on two threads too)
+        for m in d.get("mesh_fixed_floor") or []:
+            r = m.get("ratio_dpm_over_liggghts")
+            r2 = m.get("ratio_dpm_2_threads_over_liggghts")
+            rows.append({"scene": "mesh floor, 2,000 spheres",
+                         "variant": f"{m['triangles']} triangles",
+                         "ratio_1": (1.0 / r) if r else None,
+                         "ratio_2": (1.0 / r2) if r2 else None,
                          "physics": "(speed only)", "file": src})
     return rows
 
