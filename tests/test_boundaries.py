@@ -37,6 +37,7 @@ import dpm
 from dpm.boundaries.mesh import triangle_duals
 from dpm.kernels.boundary_geometry import AXI, SIEVE, SLAB, TORUS, TRIANGLE, closest_any
 from dpm.kernels.boundary_search import brute_force_boundary_pairs
+from dpm.kernels.neighbours import SLOT_SLACK
 
 G = 9.81
 GLASS = dict(density=2500.0, young=5e6, poisson=0.45)
@@ -961,6 +962,12 @@ def test_candidate_list_matches_brute_force(moved):
     assert len(ref) > 80 and len(touching) == 0
     by_owner = {int(sim.walls.owner[wk]) for _, wk in ref}
     assert {0, 1, 2, 3} <= by_owner
+    # the first build wrote into slots of SLOT_SLACK entries (the list was empty): elements
+    # with more took the second pass; a rebuild in place fills slots sized by that list
+    per_element = np.diff(sim.wall_contacts.start)
+    assert per_element.max() > SLOT_SLACK
+    sim.backend.rebuild()
+    assert pair_set(sim) == ref
     if moved:
         sim.run(steps=3000, progress=False)
         assert np.abs(sim.walls.frame[0, 3:12] - pose[0].ravel()).max() > 0.1

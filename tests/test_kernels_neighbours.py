@@ -40,6 +40,27 @@ def test_matches_brute_force_polydisperse(seed):
         assert np.all(np.diff(seg) > 0)
 
 
+def test_far_flung_elements_get_capped_cells_and_the_brute_force_list():
+    """Two clumps 1 km apart: the grid over their bounding box is capped at
+    CELLS_PER_ELEMENT cells per element (coarse cells, many candidates each), and the list
+    is still the plain double loop's."""
+    rng = np.random.default_rng(11)
+    n = 300
+    pos = rng.uniform(0, 0.02, (n, 3))
+    pos[n // 2:] += 1000.0
+    rad = np.full(n, 1e-3)
+    owner = np.arange(n)
+    skin = 2e-4
+    _, _, dims, cell_start, _ = neighbours.bin_elements(pos, 2 * 1e-3 + skin, np.zeros(6))
+    assert np.prod(dims) <= neighbours.CELLS_PER_ELEMENT * n + 27
+    assert len(cell_start) == np.prod(dims) + 1
+    count, start, j, _ = _build(pos, rad, owner, skin)
+    got = {(i, int(j[k])) for i in range(n) for k in range(start[i], start[i + 1])}
+    ref = set(neighbours.brute_force_pairs(pos, rad, owner, skin, np.zeros(6)))
+    assert count == len(ref) > 100
+    assert got == ref
+
+
 def test_overflow_reports_need_and_keeps_old_list():
     rng = np.random.default_rng(5)
     pos = rng.uniform(0, 0.01, (200, 3))

@@ -22,8 +22,14 @@ from numba import prange
 
 from .config import inline_jit, jit, pjit
 
-#: at most this many cells per element (a sparse scene gets coarser cells)
-CELLS_PER_ELEMENT = 2
+#: at most this many cells per element (a sparse scene gets coarser cells). A dilute
+#: scene (a stream of spheres falling through a tall container) fills little of its
+#: bounding box: with 2 cells per element the meshGran port's stream got cells 3x the
+#: needed width and its search scanned ~27x the candidates; 32 halves its search while the
+#: binning's cost per cell stays small (benchmarks/NOTES.md)
+CELLS_PER_ELEMENT = 32
+#: and never more cells than this (64 MiB of cell starts), whatever the element count
+MAX_CELLS = 1 << 23
 
 
 @jit
@@ -58,8 +64,9 @@ def bin_elements(e_pos, cell_size, period):
     for d in range(3):
         if n > 0 and hi[d] > lo[d]:
             dims[d] = max(1, int((hi[d] - lo[d]) / cell_size))
-    limit = CELLS_PER_ELEMENT * n + 27
-    total = dims[0] * dims[1] * dims[2]
+    limit = min(CELLS_PER_ELEMENT * n + 27, MAX_CELLS)
+    total = float(dims[0]) * dims[1] * dims[2]  # (float: a far-flung element's box
+    # could overflow an integer product)
     if total > limit:
         f = (total / limit) ** (1.0 / 3.0)
         for d in range(3):
@@ -287,6 +294,41 @@ SLOT_SLACK = 4
 
 
 @jit
+def slot_starts(old_start, n):
+    """Starts of the transient slots of a one-pass list build: each of the n elements
+    gets its count in the previous list (``old_start``, CSR) plus ``SLOT_SLACK``."""
+    slot_start = np.empty(n + 1, np.int64)
+    slot_start[0] = 0
+    for i in range(n):
+        slot_start[i + 1] = slot_start[i] + (old_start[i + 1] - old_start[i]) + SLOT_SLACK
+    return slot_start
+
+
+@jit
+def rows_of_counts(counts, slot_start):
+    """(whether every element's count fitted its slot, the exact rows' starts)."""
+    n = counts.shape[0]
+    fits = True
+    new_start = np.empty(n + 1, np.int64)
+    new_start[0] = 0
+    for i in range(n):
+        if counts[i] > slot_start[i + 1] - slot_start[i]:
+            fits = False
+        new_start[i + 1] = new_start[i] + counts[i]
+    return fits, new_start
+
+
+@jit
+def copy_slots(counts, slot_start, slots, new_start, out):
+    """Each element's filled slot into its exact row."""
+    for i in range(counts.shape[0]):
+        s0 = slot_start[i]
+        d0 = new_start[i]
+        for k in range(counts[i]):
+            out[d0 + k] = slots[s0 + k]
+
+
+@jit
 def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist, nl_active,
                          t_start, t_pair, period, first_ghost):
     """Rebuild the half list, merge history and flags, copy back, build the transpose.
@@ -313,32 +355,17 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
     lo, width, dims, cell_start, order = bin_elements(e_pos, 2.0 * rmax + skin, period)
     sp, so = _sorted_copies(e_pos, e_radius, e_owner, order)
     counts = np.zeros(n, np.int32)
-    slot_start = np.empty(n + 1, np.int64)
-    slot_start[0] = 0
-    for i in range(n):
-        slot_start[i + 1] = slot_start[i] + (nl_start[i + 1] - nl_start[i]) + SLOT_SLACK
+    slot_start = slot_starts(nl_start, n)
     slots = np.empty(slot_start[n], nl_j.dtype)  # transient: keys only
     _search(sp, so, skin, lo, width, dims, cell_start, order, counts, slot_start,
             slot_start[1:], slots, n >= 0, period, first_ghost)
-    fits = True
-    for i in range(n):
-        if counts[i] > slot_start[i + 1] - slot_start[i]:
-            fits = False
-            break
-    new_start = np.empty(n + 1, np.int64)
-    new_start[0] = 0
-    for i in range(n):
-        new_start[i + 1] = new_start[i] + counts[i]
+    fits, new_start = rows_of_counts(counts, slot_start)
     count = new_start[n]
     if count > cap:
         return count
     new_j = np.empty(count, nl_j.dtype)
     if fits:
-        for i in range(n):
-            s0 = slot_start[i]
-            d0 = new_start[i]
-            for k in range(counts[i]):
-                new_j[d0 + k] = slots[s0 + k]
+        copy_slots(counts, slot_start, slots, new_start, new_j)
     else:  # some element outgrew its slot: fill the exact rows in a second pass
         _search(sp, so, skin, lo, width, dims, cell_start, order, counts, new_start,
                 new_start[1:], new_j, n >= 0, period, first_ghost)

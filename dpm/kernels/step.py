@@ -41,10 +41,12 @@ from numba import prange
 from .config import inline_jit, row18, row20, step_jit as jit
 from .config import step_pjit as pjit
 from .boundary_geometry import AXI, JOINED, TORUS, TRIANGLE, in_range, touching
+from .boundary_geometry import off_triangle_plane
 from .boundary_search import boundary_motion_since_rebuild, to_local, to_world
 from .mesh_contact import resolve_triangle_contacts
 from .neighbours import _copy_back as copy_back, _merge as merge_history
-from .neighbours import build_neighbour_list, minimum_image
+from .neighbours import build_neighbour_list, copy_slots, minimum_image, rows_of_counts
+from .neighbours import slot_starts
 from .rigid_rotation import place_elements
 from .halo import pack_halo, unpack_halo
 from .mpi_calls import mpi_wtime, vote_and_halo
@@ -979,12 +981,18 @@ def boundary_work(dt, bnd):
 
 
 @pjit
-def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt, cell_start,
-            cell_items, prim_cells, counts, out_start, out_w, fill, n):
+def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
+                         cell_start, cell_items, prim_cells, counts, out_start, out_end, out_w,
+                         fill, n):
+    """counts[i] = boundary primitives within r + skin of element i, for i < n (the rest
+    untouched). With ``fill`` they are also written, sorted, into
+    out_w[out_start[i]:out_end[i]] (as many as fit: a count above the room says the slot
+    was too small)."""
     nb = frame.shape[0]
     for i in prange(n):
-        k = out_start[i] if fill else 0
-        k0 = k
+        k0 = out_start[i] if fill else 0
+        room = out_end[i] - k0 if fill else 0
+        k = k0
         r = e_radius[i]
         reach = r + skin
         for b in range(nb):
@@ -993,9 +1001,12 @@ def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid
             g = grid_int[b]
             if g[0] == 0:
                 for w in range(g[5], g[6]):
+                    if (HAS_TRIANGLES and kind[w] == TRIANGLE
+                            and off_triangle_plane(par[w], lx, ly, lz, reach)):
+                        continue
                     d = closest(kind[w], par[w], lx, ly, lz, r)[0]
                     if in_range(kind[w], d, r, skin):
-                        if fill:
+                        if k - k0 < room:
                             out_w[k] = w
                         k += 1
                 continue
@@ -1016,22 +1027,24 @@ def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid
                             if (cx != max(pc[0], q0) or cy != max(pc[1], q1)
                                     or cz != max(pc[2], q2)):
                                 continue  # found in an earlier cell of this query
+                            if (HAS_TRIANGLES and kind[w] == TRIANGLE
+                                    and off_triangle_plane(par[w], lx, ly, lz, reach)):
+                                continue
                             d = closest(kind[w], par[w], lx, ly, lz, r)[0]
                             if in_range(kind[w], d, r, skin):
-                                if fill:
+                                if k - k0 < room:
                                     out_w[k] = w
                                 k += 1
+        counts[i] = k - k0
         if fill:
             # grids yield primitives out of order: sort the element's slice
-            for a in range(k0 + 1, k):
+            for a in range(k0 + 1, k0 + min(k - k0, room)):
                 v = out_w[a]
                 c = a - 1
                 while c >= k0 and out_w[c] > v:
                     out_w[c + 1] = out_w[c]
                     c -= 1
                 out_w[c + 1] = v
-        else:
-            counts[i] = k
 
 
 @jit
@@ -1039,27 +1052,35 @@ def build_boundary_list(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_
                         cell_start, cell_items, prim_cells, wl_start, wl_w, wl_hist,
                         wl_active, first_ghost):
     """Rebuild the element-primitive list (primitives within r + skin), merging history.
-    The new list is written into scratch arrays of its exact size, freed on return.
     Elements from ``first_ghost`` on (an MPI rank's ghosts) get no entries.
+
+    As the pair list (:func:`build_neighbour_list`): one search pass writes each element's
+    primitives into a transient slot sized by its entries in the previous list plus
+    ``SLOT_SLACK``, then the slots are copied into the exact rows; only if an element
+    outgrew its slot does a second pass fill rows sized by the first pass' counts (a
+    search pass is most of a rebuild's boundary part: one closest point per candidate).
+    The new list is written into scratch arrays of its exact size, freed on return.
 
     Returns the number of entries; above the capacity nothing is changed.
     """
     n = e_pos.shape[0]
     counts = np.zeros(n, np.int64)
-    new_start = np.empty(n + 1, np.int64)
+    slot_start = slot_starts(wl_start, n)
+    slots = np.empty(slot_start[n], wl_w.dtype)  # transient: keys only
     boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
-                         cell_start, cell_items, prim_cells, counts, new_start, wl_w, n < 0,
-                         first_ghost)
-    new_start[0] = 0
-    for i in range(n):
-        new_start[i + 1] = new_start[i] + counts[i]
+                         cell_start, cell_items, prim_cells, counts, slot_start,
+                         slot_start[1:], slots, n >= 0, first_ghost)
+    fits, new_start = rows_of_counts(counts, slot_start)
     count = new_start[n]
     if count > wl_w.shape[0]:
         return count
     new_w = np.empty(count, wl_w.dtype)
-    boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
-                         cell_start, cell_items, prim_cells, counts, new_start, new_w, n >= 0,
-                         first_ghost)
+    if fits:
+        copy_slots(counts, slot_start, slots, new_start, new_w)
+    else:  # some element outgrew its slot: fill the exact rows in a second pass
+        boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
+                             cell_start, cell_items, prim_cells, counts, new_start,
+                             new_start[1:], new_w, n >= 0, first_ghost)
     new_hist = np.empty((count, wl_hist.shape[1]))
     new_active = np.empty(count, np.uint8)
     merge_history(wl_start, wl_w, wl_hist, wl_active, new_start, new_w, new_hist, new_active)
