@@ -343,6 +343,12 @@ FRAME_WIDTH = 18
 IDENTITY_FRAME = np.array([0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0], float)
 
 
+#: a boundary of more primitives than this gets a search grid; fewer are tested one by
+#: one (a triangle's plane test rejects most in a few ns: on the meshGran port's 18 large
+#: triangles the plain loop took 0.56 of the grid's time, benchmarks/NOTES.md)
+GRID_FROM = 32
+
+
 class BoundaryTable:
     """Packed primitives of every boundary, their boundary frames and search grids.
 
@@ -379,7 +385,7 @@ class BoundaryTable:
             g[5] = first
             g[6] = first + n
             lo, hi = prims.lower, prims.upper
-            if n > 16 and np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)):
+            if n > GRID_FROM and np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)):
                 lo = lo.min(axis=0) - reach
                 hi = hi.max(axis=0) + reach
                 size = max(2.0 * reach, float(np.max(hi - lo)) / 1e3)

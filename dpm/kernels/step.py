@@ -1002,7 +1002,7 @@ def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid
             if g[0] == 0:
                 for w in range(g[5], g[6]):
                     if (HAS_TRIANGLES and kind[w] == TRIANGLE
-                            and off_triangle_plane(par[w], lx, ly, lz, reach)):
+                            and off_triangle_plane(par, w, lx, ly, lz, reach)):
                         continue
                     d = closest(kind[w], par[w], lx, ly, lz, r)[0]
                     if in_range(kind[w], d, r, skin):
@@ -1028,7 +1028,7 @@ def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid
                                     or cz != max(pc[2], q2)):
                                 continue  # found in an earlier cell of this query
                             if (HAS_TRIANGLES and kind[w] == TRIANGLE
-                                    and off_triangle_plane(par[w], lx, ly, lz, reach)):
+                                    and off_triangle_plane(par, w, lx, ly, lz, reach)):
                                 continue
                             d = closest(kind[w], par[w], lx, ly, lz, r)[0]
                             if in_range(kind[w], d, r, skin):
