@@ -501,8 +501,8 @@ def closest_any(kind, p, x, y, z, r):
 @inline_jit
 def off_triangle_plane(par, w, x, y, z, reach):
     """Whether (x, y, z) lies more than ``reach`` from the plane of the triangle in row w
-    of ``par`` (its half thickness par[w, 9] taken off): then it is farther than that
-    from the triangle too. Three products instead of a closest point: the boundary
+    of ``par`` (its half thickness par[w, 9] taken off): then the triangle itself lies
+    farther than that too. Three products instead of a closest point: the boundary
     search's cheap reject of the candidates a mesh grid's cell yields (a large triangle
     sits in many cells). Indexed in place (a row view per candidate cost ~40 % of the
     search on the meshGran port's 18 triangles). The margin keeps the reject strictly
