@@ -60,6 +60,25 @@ def run_dpm(lat, steps, threads=1, warmup=20):
             "neighbour_rebuilds": sim.rebuild_count}
 
 
+def software() -> dict:
+    """What a run's speed depends on besides dpm's code: the processor's model name and the
+    versions of Python, numba, llvmlite and numpy (stop 42 found dpm's one thread 30 % slower
+    than stop 41's on the same code, and could not say whether any of these had changed)."""
+    import llvmlite
+    import numpy
+
+    cpu = platform.processor()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {"cpu": cpu, "python": platform.python_version(), "numba": numba.__version__,
+            "llvmlite": llvmlite.__version__, "numpy": numpy.__version__}
+
+
 def run_liggghts(lat, steps):
     exe = shutil.which("liggghts")
     if exe is None:
@@ -130,7 +149,8 @@ def main():
     lg = None if a.no_liggghts else run_liggghts(lat, steps)
     lps = lg["particle_steps_per_s"] if lg else None
     result = {"scene": "box_settle", "lattice": lat, "machine": platform.processor()
-              or platform.machine(), "cores": os.cpu_count(), "dpm": d, "dpm_2_threads": d2,
+              or platform.machine(), "cores": os.cpu_count(), "software": software(),
+              "dpm": d, "dpm_2_threads": d2,
               "liggghts": lg, "ratio": d["particle_steps_per_s"] / lps if lg else None,
               "ratio_2_threads": d2["particle_steps_per_s"] / lps if lg and d2 else None,
               "mean_z_rel_diff": (d["mean_z_m"] / lg["mean_z_m"] - 1)
