@@ -10,7 +10,8 @@ container, settled), and from each:
   rebuilds per 1,000 steps;
 * times the parts of a step on one thread: the integrator's pre-force part, the fused
   force pass (on 1 and on 2 threads), and one list rebuild split into the pair list and
-  the boundary list.
+  the boundary list; and one boundary search pass on the scene's table against the same
+  boundaries with a search grid forced on.
 
     python benchmarks/meshgran_steps.py [--blocks 4]
 
@@ -47,6 +48,40 @@ def best_us(fn, args: tuple, reps: int) -> float:
     return best
 
 
+def search_with_and_without_grid(sim, m, skin: float, ghost: int) -> dict:
+    """One boundary search pass on the scene's own table and on the same boundaries with a
+    search grid forced on (``dpm.state.GRID_FROM`` = 0), three times in turn: the mesh has
+    18 triangles, under the size from which dpm grids a boundary."""
+    import numpy as np
+
+    import dpm.state
+
+    e, own = sim.backend.records()[2], sim.walls
+    keep = dpm.state.GRID_FROM
+    dpm.state.GRID_FROM = 0
+    try:
+        gridded = dpm.state.BoundaryTable(sim.boundaries, lambda mat: sim._material_index(mat, ""),
+                                          float(e.radius.max()) + skin)
+    finally:
+        dpm.state.GRID_FROM = keep
+    gridded.frame[:] = own.frame
+    times: dict[str, list[float]] = {"plain_loop": [], "grid": []}
+    entries = {}
+    for _ in range(3):
+        for name, t in (("plain_loop", own), ("grid", gridded)):
+            counts = np.zeros(len(e.radius), np.int64)
+            starts = np.zeros(len(e.radius) + 1, np.int64)
+            args = (e.pos, e.radius, skin, t.frame, t.kind, t.par, t.grid_int, t.grid_flt,
+                    t.cell_start, t.cell_items, t.prim_cells, counts, starts, starts[1:],
+                    starts[:0], False, ghost)
+            times[name].append(best_us(m.boundary_search_pass, args, 200))
+            entries[name] = int(counts.sum())
+    assert entries["plain_loop"] == entries["grid"], entries
+    return {"boundary_search_own_grid_on": bool(own.grid_int[:, 0].any()),
+            "boundary_search_plain_loop_us": min(times["plain_loop"]),
+            "boundary_search_grid_us": min(times["grid"])}
+
+
 def parts(sim, numba) -> dict:
     """The step's parts timed on the scene's current state (each call changes it little:
     a step's worth of motion at most)."""
@@ -71,6 +106,7 @@ def parts(sim, numba) -> dict:
                 elems.pos, elems.radius, skin, bnd.frame, bnd.kind, bnd.par, bnd.grid_int,
                 bnd.grid_flt, bnd.cell_start, bnd.cell_items, bnd.prim_cells, walls.start,
                 walls.key, walls.hist, walls.active, ghost), 50)
+            out.update(search_with_and_without_grid(sim, m, skin, ghost))
         if m.FUSED:
             out[f"force_pass_{th}_threads_us"] = best_us(
                 m.fused_pass, (0.0, False, ctl, bodies, elems, pairs, walls, bnd), 300)
@@ -123,7 +159,9 @@ def main(argv: list[str] | None = None) -> dict:
                   f"boundary {p['boundary_list_us']:.0f}), pre-force {p['pre_force_us']:.0f}"
                   + (f", force pass {p['force_pass_1_threads_us']:.0f} / "
                      f"{p['force_pass_2_threads_us']:.0f} us on 1 / 2 threads"
-                     if "force_pass_1_threads_us" in p else ""), flush=True)
+                     if "force_pass_1_threads_us" in p else "")
+                  + f"; boundary search {p['boundary_search_plain_loop_us']:.0f} us plain loop, "
+                  f"{p['boundary_search_grid_us']:.0f} with a grid", flush=True)
     result = {"scene": "meshGran port (benchmarks/meshgran.py), dpm alone",
               "blocks": a.blocks, "moments": rows}
     out = HERE / "results" / "meshgran_steps.json"

@@ -899,7 +899,7 @@ def place_near(rng, surface_pts, frame_pose, n, gap=(0.2e-3, 2.5e-3)):
 @pytest.mark.parametrize("moved", [False, True])
 def test_candidate_list_matches_brute_force(moved):
     """After prepare, the element-primitive list equals the plain double loop over all
-    primitives (reach r + skin): a 320-triangle icosphere mesh (> 16: search grid), a tube,
+    primitives (reach r + skin): a 320-triangle icosphere mesh (> 32: search grid), a tube,
     a bend and a wall; with ``moved`` the mesh carries a tumbling motion whose frame at t = 0
     is rotated and shifted, and after 3000 steps of the run the list is rebuilt at the new
     frame and compared again."""

@@ -504,9 +504,9 @@ def off_triangle_plane(par, w, x, y, z, reach):
     of ``par`` (its half thickness par[w, 9] taken off): then the triangle itself lies
     farther than that too. Three products instead of a closest point: the boundary
     search's cheap reject of the candidates a mesh grid's cell yields (a large triangle
-    sits in many cells). Indexed in place (a row view per candidate cost ~40 % of the
-    search on the meshGran port's 18 triangles). The margin keeps the reject strictly
-    inside what ``in_range`` would refuse."""
+    sits in many cells). Indexed in place: a row view per candidate was a large share
+    of the search. The margin keeps the reject strictly inside what ``in_range`` would
+    refuse."""
     h = ((x - par[w, 0]) * par[w, 10] + (y - par[w, 1]) * par[w, 11]
          + (z - par[w, 2]) * par[w, 12])
     return abs(h) - par[w, 9] > reach * (1.0 + 1e-9)
