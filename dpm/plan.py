@@ -84,11 +84,25 @@ def _kind_alias(k: int) -> str:
     return fn if mod == BUILTIN_MODULE else f"_kind_{k}"
 
 
-def _closest_lines(kinds: list[int], periodic: bool, fused: bool) -> list[str]:
+#: a scene of at most this many boundary kinds inlines its ``closest`` (the dispatch over
+#: its kinds' geometry) at every call; past it only the contact loop of the step inlines
+#: it, and the list searches, the initial-overlap check and the pipe-joint hand-over call
+#: one compiled ``closest_call``. numba inlines at the level of its IR and types each copy
+#: anew, so the copies of a many-kind dispatch made most of a module's compile: one
+#: sphere's scene with the six built-in kinds compiled in 212 s, 70 s with the calls; with
+#: four kinds 96 s against 54 s; with one kind ~25 s either way (benchmarks/NOTES.md
+#: row 75). The price is a call per search candidate in scenes of 3+ kinds.
+INLINE_SEARCH_KINDS = 2
+
+
+def _closest_lines(kinds: list[int], periodic: bool, fused: bool,
+                   inline: bool = True) -> list[str]:
     """A ``closest`` dispatching over the boundary kinds of the scene only; the scene's
     constants (meshes present, joinable kinds present, periodic axes, which force pass).
     What each kind's geometry function is and returns comes from the registry
-    (:mod:`dpm.boundaries.primitives`)."""
+    (:mod:`dpm.boundaries.primitives`). ``closest`` is inlined where the step calls it
+    unless ``inline`` is False; ``closest_call`` is ``closest``, or a compiled function
+    calling it past :data:`INLINE_SEARCH_KINDS` kinds."""
     from .boundaries.primitives import primitive_kind
     from .kernels.boundary_geometry import PLANE, TRIANGLE
 
@@ -97,7 +111,7 @@ def _closest_lines(kinds: list[int], periodic: bool, fused: bool) -> list[str]:
     lines = [*_kind_imports(kinds), "",
              f"HAS_TRIANGLES = {TRIANGLE in kinds}", f"HAS_JOINTS = {joints}",
              f"PERIODIC = {bool(periodic)}", f"FUSED = {bool(fused)}", "", "",
-             "@inline_jit",
+             "@inline_jit" if inline else "@jit",
              "def closest(kind, p, x, y, z, r):",
              '    """Contact geometry of the boundary kinds of this scene."""']
     for n, k in enumerate(kinds):
@@ -113,7 +127,11 @@ def _closest_lines(kinds: list[int], periodic: bool, fused: bool) -> list[str]:
             continue
         lines.append(f"{pad}d, nx, ny, nz = {call}")
         lines.append(f"{pad}return d, nx, ny, nz, 0")
-    return lines
+    if len(kinds) <= INLINE_SEARCH_KINDS or not inline:
+        return [*lines, "", "", "closest_call = closest"]
+    return [*lines, "", "", "@jit", "def closest_call(kind, p, x, y, z, r):",
+            '    """closest, called (not inlined) by the list searches and checks."""',
+            "    return closest(kind, p, x, y, z, r)"]
 
 
 def _resolve(law):

@@ -41,7 +41,7 @@ from numba import prange
 from .config import inline_jit, row18, row20, step_jit as jit
 from .config import step_pjit as pjit
 from .boundary_geometry import AXI, JOINED, TORUS, TRIANGLE, in_range, touching
-from .boundary_geometry import off_triangle_plane
+from .boundary_geometry import off_triangle_plane, triangle_distance
 from .boundary_search import boundary_motion_since_rebuild, to_local, to_world
 from .mesh_contact import resolve_triangle_contacts
 from .neighbours import _copy_back as copy_back, _merge as merge_history
@@ -71,6 +71,12 @@ def closest(kind, p, x, y, z, r):
     """Contact geometry of the boundary kinds of this scene."""
     d, nx, ny, nz = plane_distance(p, x, y, z)
     return d, nx, ny, nz, 0
+
+
+#: ``closest`` where it is not in the step's contact loop (the list searches, the
+#: initial-overlap check, the pipe-joint hand-over): the same function inlined for a scene
+#: of few boundary kinds, a compiled function called for more (dpm.plan.INLINE_SEARCH_KINDS)
+closest_call = closest
 
 ROLLING = False
 
@@ -255,7 +261,7 @@ def joint_hand_over(q0, q1, xi, yi, zi, ri, wl_w, wl_active, wl_hist, w_kind, w_
         if not wl_active[q2] or (k2 != AXI and k2 != TORUS):
             continue
         lx, ly, lz = to_local(f_cur[w_owner[w2]], xi, yi, zi)
-        if closest(k2, w_par[w2], lx, ly, lz, ri)[4] != JOINED:
+        if closest_call(k2, w_par[w2], lx, ly, lz, ri)[4] != JOINED:
             continue
         for q in range(q0, q1):
             w = wl_w[q]
@@ -263,7 +269,7 @@ def joint_hand_over(q0, q1, xi, yi, zi, ri, wl_w, wl_active, wl_hist, w_kind, w_
             if q == q2 or wl_active[q] or (k != AXI and k != TORUS):
                 continue
             lx, ly, lz = to_local(f_cur[w_owner[w]], xi, yi, zi)
-            d, _, _, _, feature = closest(k, w_par[w], lx, ly, lz, ri)
+            d, _, _, _, feature = closest_call(k, w_par[w], lx, ly, lz, ri)
             if feature != JOINED and touching(k, d, ri):
                 for c in range(nh):
                     wl_hist[q, c] = wl_hist[q2, c]
@@ -409,8 +415,7 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
             w = wl_w[q]
             if w_kind[w] == TRIANGLE:
                 lx, ly, lz = to_local(row18(f_cur, w_owner[w]), xi, yi, zi)
-                dist, lnx, lny, lnz, feature = closest(TRIANGLE, row20(w_par, w), lx, ly, lz,
-                                                       ri)
+                dist, lnx, lny, lnz, feature = triangle_distance(row20(w_par, w), lx, ly, lz)
                 tag = feature if dist < (ri + reach if RANGED else ri) else -1
                 wl_tag[q] = tag
                 if tag >= 0:
@@ -980,6 +985,19 @@ def boundary_work(dt, bnd):
             f_load[b, 6] += dt * p
 
 
+@inline_jit
+def candidate_distance(kind, par, w, lx, ly, lz, r, reach):
+    """Distance of a sphere (radius r, centre at lx, ly, lz in the boundary's frame) to
+    primitive ``w`` for the list search; +inf for a triangle whose plane lies farther than
+    ``reach`` (rejected before its closest point). A triangle's geometry is inlined here,
+    every other kind goes through ``closest_call``."""
+    if HAS_TRIANGLES and kind[w] == TRIANGLE:
+        if off_triangle_plane(par, w, lx, ly, lz, reach):
+            return np.inf
+        return triangle_distance(par[w], lx, ly, lz)[0]
+    return closest_call(kind[w], par[w], lx, ly, lz, r)[0]
+
+
 @pjit
 def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
                          cell_start, cell_items, prim_cells, counts, out_start, out_end, out_w,
@@ -1001,10 +1019,7 @@ def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid
             g = grid_int[b]
             if g[0] == 0:
                 for w in range(g[5], g[6]):
-                    if (HAS_TRIANGLES and kind[w] == TRIANGLE
-                            and off_triangle_plane(par, w, lx, ly, lz, reach)):
-                        continue
-                    d = closest(kind[w], par[w], lx, ly, lz, r)[0]
+                    d = candidate_distance(kind, par, w, lx, ly, lz, r, reach)
                     if in_range(kind[w], d, r, skin):
                         if k - k0 < room:
                             out_w[k] = w
@@ -1027,10 +1042,7 @@ def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid
                             if (cx != max(pc[0], q0) or cy != max(pc[1], q1)
                                     or cz != max(pc[2], q2)):
                                 continue  # found in an earlier cell of this query
-                            if (HAS_TRIANGLES and kind[w] == TRIANGLE
-                                    and off_triangle_plane(par, w, lx, ly, lz, reach)):
-                                continue
-                            d = closest(kind[w], par[w], lx, ly, lz, r)[0]
+                            d = candidate_distance(kind, par, w, lx, ly, lz, r, reach)
                             if in_range(kind[w], d, r, skin):
                                 if k - k0 < room:
                                     out_w[k] = w
@@ -1115,7 +1127,7 @@ def entry_overlaps(e_pos, e_radius, wl_start, wl_w, kind, par, owner, frame):
         for q in range(wl_start[i], wl_start[i + 1]):
             w = wl_w[q]
             lx, ly, lz = to_local(frame[owner[w]], e_pos[i, 0], e_pos[i, 1], e_pos[i, 2])
-            d, _, _, _, feature = closest(kind[w], par[w], lx, ly, lz, r)
+            d, _, _, _, feature = closest_call(kind[w], par[w], lx, ly, lz, r)
             if touching(kind[w], d, r) and feature != JOINED:
                 out[q] = (r - d) / r
     return out
