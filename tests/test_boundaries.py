@@ -83,6 +83,27 @@ def sentinels(sim: dpm.Simulation, w: dpm.Material) -> None:
                      hole=2e-3, bar=1e-3, clearance_model="fixed")
 
 
+def test_many_kind_scenes_call_closest_from_their_searches():
+    """A scene of few boundary kinds inlines its ``closest`` everywhere; past
+    ``INLINE_SEARCH_KINDS`` the list searches and checks call one compiled
+    ``closest_call`` (an inlined copy per call site made a six-kind module compile ~3x
+    longer, benchmarks/NOTES.md row 75) while the contact loop still inlines it. The same
+    results either way: the sentinel scenes of this module have every kind."""
+    from dpm.boundaries.primitives import BUILTIN_CODES
+    from dpm.kernels.boundary_geometry import PLANE
+
+    laws = [("dpm.kernels.law_hertz_mindlin", "hertz_mindlin")]
+    vv = "dpm.kernels.integrate_velocity_verlet"
+    few = dpm.plan.render(laws, vv, kinds=[PLANE, TRIANGLE][:dpm.plan.INLINE_SEARCH_KINDS])
+    many = dpm.plan.render(laws, vv, kinds=sorted(BUILTIN_CODES))
+    assert "\nclosest_call = closest\n" in few and "def closest_call(" not in few
+    assert "@jit\ndef closest_call(" in many and "\nclosest_call = closest\n" not in many
+    for src in (few, many):
+        assert "@inline_jit\ndef closest(" in src
+        assert "closest_call(kind[w], par[w]" in src  # the search's and the check's calls
+        assert "= closest(kind, row20(w_par, w)" in src  # the contact loop's
+
+
 def scene(gravity=(0, 0, -G), dt=2e-6, friction=0.5, restitution=0.3, fused=False, **law):
     """(sim, particle material, wall material) with Hertz-Mindlin for both pairs; the
     two-pass force sum unless ``fused`` (see the module docstring)."""
