@@ -88,10 +88,10 @@ def _kind_alias(k: int) -> str:
 #: its kinds' geometry) at every call; past it only the contact loop of the step inlines
 #: it, and the list searches, the initial-overlap check and the pipe-joint hand-over call
 #: one compiled ``closest_call``. numba inlines at the level of its IR and types each copy
-#: anew, so the copies of a many-kind dispatch made most of a module's compile: one
-#: sphere's scene with the six built-in kinds compiled in 212 s, 70 s with the calls; with
-#: four kinds 96 s against 54 s; with one kind ~25 s either way (benchmarks/NOTES.md
-#: row 75). The price is a call per search candidate in scenes of 3+ kinds.
+#: anew, so the copies of a many-kind dispatch made most of a module's compile: a box
+#: scene with far boundaries of the six built-in kinds reached its first steps from an
+#: empty cache in 206 s, 91 s with the calls (benchmarks/NOTES.md row 75). The price is a
+#: call per search candidate in scenes of 3+ kinds (their search pass 1.0-1.3x slower).
 INLINE_SEARCH_KINDS = 2
 
 
