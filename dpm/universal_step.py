@@ -206,10 +206,9 @@ def universal_module(integrator_module: str) -> ModuleType:
     lines += plan._closest_lines(kinds, True, False, inline=False)
     parts = {p.target()[0] for ps in builtin_parts().values() for p in ps if p is not None}
     src = plan._splice("step.py", lines)
-    # the law and the geometry dispatch compiled once each, called (not inlined) from
-    # every loop: inlined at each call site of every driver they made the module compile
-    # for ~8 minutes
-    # (closest: plan._closest_lines(inline=False))
+    # the laws and (inline=False above) the geometry dispatch compiled once each, called
+    # (not inlined) from every loop: inlined at each call site of every driver they made
+    # the module compile for ~8 minutes
     for name in ("pair_force", "pair_normal"):
         src = src.replace(f"@inline_jit\ndef {name}(", f"@jit\ndef {name}(")
     return plan._load(src, parts | {integrator_module}, "dpm_universal")

@@ -73,9 +73,10 @@ def closest(kind, p, x, y, z, r):
     return d, nx, ny, nz, 0
 
 
-#: ``closest`` where it is not in the step's contact loop (the list searches, the
-#: initial-overlap check, the pipe-joint hand-over): the same function inlined for a scene
-#: of few boundary kinds, a compiled function called for more (dpm.plan.INLINE_SEARCH_KINDS)
+#: ``closest`` for the list searches, the initial-overlap check and the pipe-joint
+#: hand-over (the one per-step use: each active tube or bend contact): the same function
+#: inlined for a scene of few boundary kinds, a compiled function called for more
+#: (dpm.plan.INLINE_SEARCH_KINDS); the contact loop itself always inlines ``closest``
 closest_call = closest
 
 ROLLING = False
