@@ -14,8 +14,10 @@ read, see benchmarks/scenes/box_settle/README.md). LIGGGHTS ends at a mean heigh
 from __future__ import annotations
 
 import argparse
+import os
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -33,8 +35,13 @@ def initial_packing(nx: int, ny: int, nz: int, workdir: Path = SCENE_DIR) -> Pat
     csv = workdir / f"box_settle_{nx}x{ny}x{nz}.csv"
     if not csv.exists():
         workdir.mkdir(parents=True, exist_ok=True)
-        subprocess.run([sys.executable, str(SCENE_DIR / "gen_init.py"), str(nx), str(ny),
-                        str(nz)], cwd=workdir, check=True, capture_output=True)
+        # written in a private folder and renamed into place (the CSV last): MPI ranks
+        # of one run all come here at once, and none may read another's half-written file
+        with tempfile.TemporaryDirectory(dir=workdir) as tmp:
+            subprocess.run([sys.executable, str(SCENE_DIR / "gen_init.py"), str(nx),
+                            str(ny), str(nz)], cwd=tmp, check=True, capture_output=True)
+            for suffix in (".data", ".csv"):
+                os.replace(Path(tmp) / (csv.stem + suffix), csv.with_suffix(suffix))
     return csv
 
 
