@@ -46,6 +46,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 HERE = Path(__file__).resolve().parent
@@ -62,15 +64,64 @@ def _mpiexec() -> str:
     return str(beside) if beside.exists() else (shutil.which("mpiexec") or "mpiexec")
 
 
-def worker(lat: tuple[int, int, int], steps: int, out: str, threads: int) -> None:
-    """Run under mpiexec (or alone): the box_settle scene, timed after a warm-up."""
+def settled_packing(lat: tuple[int, int, int], settle: int, threads: int = 2) -> Path:
+    """The box_settle lattice ``lat`` after ``settle`` steps of dpm (``threads`` threads,
+    one process), written once (then reused) beside the lattice's own files in gen_init.py's
+    two formats: ``box_settle_NXxNYxNZ_settledS.csv`` (x,y,z,vx,vy,vz,r, the same box) and
+    ``.data`` (LIGGGHTS). Positions and velocities only: both codes start from the same
+    bed with no spin and no contact history (what a data file can carry)."""
+    from box_settle import _example
+
+    tag = f"box_settle_{lat[0]}x{lat[1]}x{lat[2]}_settled{settle}"
+    csv = SCENE / f"{tag}.csv"
+    if csv.exists():
+        return csv
+    ex = _example()
+    start = ex.initial_packing(*lat)
+    with open(start) as f:
+        header = f.readline().strip()
+    box = [float(x) for x in header.split("box=")[1].split(",")]
+    sim = ex.build(start)
+    sim.threads = threads
+    sim.run(steps=settle, progress=False)
+    b = sim.bodies
+    by_id = np.argsort(b.id, kind="stable")
+    pos, vel = b.position[by_id], b.velocity[by_id]
+    r = sim.elements.radius[b.element_start[:-1]][by_id]
+    rho = b.mass[by_id] / (4.0 / 3.0 * np.pi * r ** 3)
+    n = len(pos)
+    with tempfile.TemporaryDirectory(dir=SCENE) as tmpd:  # (renamed into place, CSV last)
+        data = Path(tmpd) / "x.data"
+        with open(data, "w") as f:
+            f.write(f"box settle {n}, settled {settle} steps\n\n{n} atoms\n1 atom types\n\n")
+            f.write(f"0 {box[0]} xlo xhi\n0 {box[1]} ylo yhi\n0 {box[2]} zlo zhi\n\n")
+            f.write("Atoms\n\n")
+            for a in range(n):
+                f.write(f"{a + 1} 1 {2 * r[a]:.17g} {rho[a]:.17g} {pos[a, 0]:.17g} "
+                        f"{pos[a, 1]:.17g} {pos[a, 2]:.17g}\n")
+            f.write("\nVelocities\n\n")
+            for a in range(n):
+                f.write(f"{a + 1} {vel[a, 0]:.17g} {vel[a, 1]:.17g} {vel[a, 2]:.17g} 0 0 0\n")
+        np.savetxt(Path(tmpd) / "x.csv", np.column_stack([pos, vel, r]), delimiter=",",
+                   header=header.lstrip("# "), comments="", fmt="%.17g")
+        os.replace(data, csv.with_suffix(".data"))
+        os.replace(Path(tmpd) / "x.csv", csv)
+    return csv
+
+
+def worker(lat: tuple[int, int, int], steps: int, out: str, threads: int,
+           packing: str | None = None) -> None:
+    """Run under mpiexec (or alone): the box_settle scene, timed after a warm-up; from
+    ``packing`` (a CSV of :func:`settled_packing`) instead of the lattice if given."""
     from box_settle import _example
 
     import dpm
 
     ex = _example()
-    csv = ex.initial_packing(*lat)
+    csv = Path(packing) if packing else ex.initial_packing(*lat)
     sim = ex.build(csv)
+    if packing:  # (a settled bed overlaps by a few % of a radius, as it did in the run)
+        sim.overlap_tolerance = 0.2
     sim.threads = threads
     t0 = time.perf_counter()
     sim.run(steps=WARMUP, progress=False)
@@ -100,13 +151,14 @@ def worker(lat: tuple[int, int, int], steps: int, out: str, threads: int) -> Non
             "rebuilds": sim.rebuild_count}))
 
 
-def run_dpm(lat, steps: int, ranks: int, threads: int, tmp: Path, oversubscribe=False):
+def run_dpm(lat, steps: int, ranks: int, threads: int, tmp: Path, oversubscribe=False,
+            packing: Path | None = None):
     out = tmp / f"dpm_{ranks}_{threads}.json"
     from box_settle import _example
 
     _example().initial_packing(*lat)  # (written once here, not by every rank at once)
     cmd = [sys.executable, __file__, "--worker", *map(str, lat), str(steps), str(out),
-           str(threads)]
+           str(threads)] + ([str(packing)] if packing else [])
     env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMI"))}
     env["NUMBA_NUM_THREADS"] = str(max(threads, 1))
     if ranks > 1:
@@ -120,18 +172,22 @@ def run_dpm(lat, steps: int, ranks: int, threads: int, tmp: Path, oversubscribe=
     return res
 
 
-def run_liggghts(lat, steps: int, ranks: int, tmp: Path):
+def run_liggghts(lat, steps: int, ranks: int, tmp: Path, packing: Path | None = None):
     exe = shutil.which("liggghts")
     if exe is None:
         return None
     work = tmp / f"lg{ranks}"
     work.mkdir(parents=True)
-    subprocess.run(["python3", str(SCENE / "gen_init.py"), *map(str, lat)], cwd=work,
-                   check=True, capture_output=True)
+    if packing:  # (the same bed as dpm's runs: settled_packing's data file)
+        data = packing.with_suffix(".data").name
+        shutil.copy(packing.with_suffix(".data"), work / data)
+    else:
+        subprocess.run(["python3", str(SCENE / "gen_init.py"), *map(str, lat)], cwd=work,
+                       check=True, capture_output=True)
+        data = f"box_settle_{lat[0]}x{lat[1]}x{lat[2]}.data"
     n = lat[0] * lat[1] * lat[2]
     shutil.copy(SCENE / "box_settle.liggghts", work)
-    cmd = [exe, "-in", "box_settle.liggghts", "-var", "DATA",
-           f"box_settle_{lat[0]}x{lat[1]}x{lat[2]}.data",
+    cmd = [exe, "-in", "box_settle.liggghts", "-var", "DATA", data,
            "-var", "STEPS", str(steps)]
     if ranks > 1:  # (the Debian package's own Open MPI launcher)
         mpirun = "/usr/bin/mpirun" if Path("/usr/bin/mpirun").exists() else "mpirun"
@@ -241,7 +297,7 @@ def plot(result: dict, path: Path) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--worker", nargs=6, default=None, help=argparse.SUPPRESS)
+    ap.add_argument("--worker", nargs="+", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--sizes", type=int, nargs="+", default=[10000, 100000])
     ap.add_argument("--steps", type=int, default=2000)
     ap.add_argument("--oversubscribe", type=int, default=0, metavar="R",
@@ -251,10 +307,15 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=1,
                     help="run every configuration this many times in turn; each ratio is "
                     "the median of the rounds' (the records kept are the last round's)")
+    ap.add_argument("--settle", type=int, default=0, metavar="S",
+                    help="time the bed after S steps of settling (settled_packing: run "
+                    "once by dpm on 2 threads, then every configuration starts from it) "
+                    "instead of the lattice's first steps; no weak-scaling row")
     a = ap.parse_args()
     if a.worker:
         lat = tuple(int(x) for x in a.worker[:3])
-        worker(lat, int(a.worker[3]), a.worker[4], int(a.worker[5]))
+        worker(lat, int(a.worker[3]), a.worker[4], int(a.worker[5]),
+               a.worker[6] if len(a.worker) > 6 else None)
         return
     strong, weak = [], []
     with tempfile.TemporaryDirectory() as tmpd:
@@ -262,15 +323,18 @@ def main() -> None:
         for size in a.sizes:
             lat = LATTICES[size]
             steps = a.steps
+            packing = settled_packing(lat, a.settle) if a.settle else None
             row = {"particles": lat[0] * lat[1] * lat[2], "lattice": lat, "steps": steps,
-                   "rounds": []}
+                   "settled_steps": a.settle, "rounds": []}
             for k in range(a.rounds):  # (the configurations in turn, round after round)
-                got = {"dpm_1": run_dpm(lat, steps, 1, 1, tmp),
-                       "dpm_2_threads": run_dpm(lat, steps, 1, 2, tmp),
-                       "dpm_2_ranks": run_dpm(lat, steps, 2, 1, tmp)}
+                got = {"dpm_1": run_dpm(lat, steps, 1, 1, tmp, packing=packing),
+                       "dpm_2_threads": run_dpm(lat, steps, 1, 2, tmp, packing=packing),
+                       "dpm_2_ranks": run_dpm(lat, steps, 2, 1, tmp, packing=packing)}
                 if not a.no_liggghts:
-                    got["liggghts_1"] = run_liggghts(lat, steps, 1, tmp / f"{size}_{k}")
-                    got["liggghts_2"] = run_liggghts(lat, steps, 2, tmp / f"{size}_{k}")
+                    got["liggghts_1"] = run_liggghts(lat, steps, 1, tmp / f"{size}_{k}",
+                                                     packing)
+                    got["liggghts_2"] = run_liggghts(lat, steps, 2, tmp / f"{size}_{k}",
+                                                     packing)
                 row.update(got)  # (the last round's records, with their splits)
                 row["rounds"].append({name: r["particle_steps_per_s"]
                                       for name, r in got.items() if r})
@@ -280,7 +344,7 @@ def main() -> None:
             (tmp / "x").mkdir(exist_ok=True)
             print(json.dumps({k: v for k, v in row.items() if not isinstance(v, dict)}),
                   flush=True)
-        if 10000 in a.sizes:  # weak: 10,000 per rank
+        if 10000 in a.sizes and not a.settle:  # weak: 10,000 per rank
             w1 = strong[a.sizes.index(10000)]["dpm_1"]
             w2 = run_dpm(LATTICES[20000], a.steps, 2, 1, tmp)
             weak = [{"ranks": 1, "particles": w1["particles"],
@@ -292,7 +356,8 @@ def main() -> None:
         over = None
         if a.oversubscribe:
             lat = LATTICES[a.sizes[0]]
-            over = run_dpm(lat, min(a.steps, 500), a.oversubscribe, 1, tmp, True)
+            over = run_dpm(lat, min(a.steps, 500), a.oversubscribe, 1, tmp, True,
+                           settled_packing(lat, a.settle) if a.settle else None)
     result = {"scene": "box_settle", "machine": platform.processor() or platform.machine(),
               "cores": os.cpu_count(), "strong": strong, "weak": weak,
               "oversubscribed_correctness_run": over}
