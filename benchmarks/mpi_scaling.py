@@ -154,9 +154,6 @@ def worker(lat: tuple[int, int, int], steps: int, out: str, threads: int,
 def run_dpm(lat, steps: int, ranks: int, threads: int, tmp: Path, oversubscribe=False,
             packing: Path | None = None):
     out = tmp / f"dpm_{ranks}_{threads}.json"
-    from box_settle import _example
-
-    _example().initial_packing(*lat)  # (written once here, not by every rank at once)
     cmd = [sys.executable, __file__, "--worker", *map(str, lat), str(steps), str(out),
            str(threads)] + ([str(packing)] if packing else [])
     env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMI"))}
