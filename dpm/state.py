@@ -9,6 +9,7 @@ import numpy as np
 
 from .errors import SceneError
 from .kernels.config import N_HISTORY
+from .kernels.entry_order import key_order, row_key_order
 
 
 def _appended(old: np.ndarray, value) -> np.ndarray:
@@ -244,7 +245,7 @@ class _CsrList:
         cnt = self.count
         rows = new_index[self._rows_of()]
         keys = self.key[:cnt]
-        o = np.lexsort((keys, rows))
+        o = row_key_order(np.ascontiguousarray(rows, np.int64), keys, len(self.start) - 1)
         self._set_entries(rows[o], keys[o], self.history[:cnt][o], self.active[:cnt][o],
                           len(self.start) - 1)
 
@@ -315,13 +316,14 @@ class Contacts(_CsrList):
             swapped = (i > j)[:, None] & flips[:cnt, :hist.shape[1]]
             hist[swapped] *= -1.0
         lo, hi = np.minimum(i, j), np.maximum(i, j)
-        o = np.lexsort((hi, lo))
+        o = row_key_order(np.ascontiguousarray(lo, np.int64), np.ascontiguousarray(hi),
+                          len(self.start) - 1)
         self._set_entries(lo[o], hi[o], hist[o], self.active[:cnt][o], len(self.start) - 1)
         if self.rows:  # the transposed index of the reordered list
             keys = self.key[:cnt]
             self.t_start[:] = 0
             np.cumsum(np.bincount(keys, minlength=len(self.start) - 1), out=self.t_start[1:])
-            self.t_pair[:cnt] = np.argsort(keys, kind="stable")
+            self.t_pair[:cnt] = key_order(keys, len(self.start) - 1)
 
 
 class WallContacts(_CsrList):

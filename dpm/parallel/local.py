@@ -146,8 +146,11 @@ def orient_pairs(e: Entries, mat: np.ndarray, plan: Any) -> Entries:
 def set_entries(lst: Any, n_rows: int, e: Entries, unique: bool = False) -> None:
     """Make ``lst`` hold exactly the entries ``e`` (sorted by row then key; with
     ``unique``, the first of equal (row, key) entries only), growing it if needed."""
-    o = np.lexsort((e.j, e.i))
-    i, j = e.i[o], e.j[o]
+    from ..kernels.entry_order import key_order, row_key_order
+
+    o = row_key_order(np.ascontiguousarray(e.i, np.int64), np.ascontiguousarray(e.j),
+                      int(n_rows))
+    i, j = take(e.i, o), take(e.j, o)
     if unique and len(i) > 1:
         first = np.r_[True, (i[1:] != i[:-1]) | (j[1:] != j[:-1])]
         o = o[first]
@@ -163,7 +166,7 @@ def set_entries(lst: Any, n_rows: int, e: Entries, unique: bool = False) -> None
         if lst.rows:
             m = len(j)
             np.cumsum(np.bincount(j, minlength=n_rows), out=lst.t_start[1:])
-            lst.t_pair[:m] = np.argsort(j, kind="stable")
+            lst.t_pair[:m] = key_order(np.ascontiguousarray(j), int(n_rows))
 
 
 @dataclass
