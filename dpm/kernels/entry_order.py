@@ -24,9 +24,8 @@ INSERTION_MAX = 48
 
 
 @jit
-def row_key_order(rows, keys, n_rows):
-    """The permutation that sorts entries by ``rows`` then ``keys`` (stable): the result
-    of ``np.lexsort((keys, rows))``. ``rows`` in ``0 .. n_rows - 1``."""
+def _bucket(rows, n_rows):
+    """(the stable order of the entries by ``rows``, where each row starts in it)."""
     n = rows.shape[0]
     start = np.zeros(n_rows + 1, np.int64)
     for k in range(n):
@@ -39,6 +38,14 @@ def row_key_order(rows, keys, n_rows):
         r = rows[k]
         order[fill[r]] = k
         fill[r] += 1
+    return order, start
+
+
+@jit
+def row_key_order(rows, keys, n_rows):
+    """The permutation that sorts entries by ``rows`` then ``keys`` (stable): the result
+    of ``np.lexsort((keys, rows))``. ``rows`` in ``0 .. n_rows - 1``."""
+    order, start = _bucket(rows, n_rows)
     for r in range(n_rows):
         a, b = start[r], start[r + 1]
         if b - a < 2:
@@ -64,15 +71,4 @@ def row_key_order(rows, keys, n_rows):
 def key_order(keys, n_keys):
     """The permutation that sorts entries by ``keys`` (stable; keys in ``0 .. n_keys -
     1``): ``np.argsort(keys, kind="stable")`` by counting."""
-    n = keys.shape[0]
-    start = np.zeros(n_keys + 1, np.int64)
-    for k in range(n):
-        start[keys[k] + 1] += 1
-    for r in range(n_keys):
-        start[r + 1] += start[r]
-    order = np.empty(n, np.int64)
-    for k in range(n):
-        r = keys[k]
-        order[start[r]] = k
-        start[r] += 1
-    return order
+    return _bucket(keys, n_keys)[0]
