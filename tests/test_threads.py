@@ -244,3 +244,24 @@ def test_a_scene_an_inlet_grows_past_sort_from_is_renumbered_in_the_same_run(mon
     sim.run(steps=cpu.SORT_CHECK_STEPS + 10, progress=False)
     assert len(sim.elements) == 5004 >= cpu.SORT_FROM
     assert np.any(np.diff(sim.bodies.id) < 0)  # renumbered (an inlet appends in id order)
+
+
+def test_threads_chunks_share_the_work_of_a_scene_without_pairs():
+    """Spheres apart from each other (no listed pair) on a floor: each of two chunks takes
+    half the elements (balanced by listed pairs alone, every element fell in the last
+    chunk and one thread did all the work); a uniform bed is split in the middle as
+    before."""
+    from dpm.kernels.step import chunk_bounds
+
+    n = 2000
+    no_pairs = np.zeros(n + 1, np.int64)
+    one_entry = np.arange(n + 1, dtype=np.int64)  # (a floor entry each)
+    b = chunk_bounds(2, no_pairs, one_entry)
+    assert b[0] == 0 and b[2] == n and b[1] == n // 2
+    assert list(chunk_bounds(4, no_pairs, no_pairs)) == [0, 500, 1000, 1500, 2000]
+    bed = 4 * np.arange(n + 1, dtype=np.int64)  # four pairs each
+    assert chunk_bounds(2, bed, no_pairs)[1] == n // 2
+    # a dense half (pairs) and a dilute half (none): the dense half's chunk is shorter
+    mixed = np.concatenate([6 * np.arange(n // 2 + 1), np.full(n // 2, 6 * (n // 2))])
+    split = chunk_bounds(2, mixed.astype(np.int64), no_pairs)[1]
+    assert 0.5 * n // 2 < split < n // 2

@@ -610,22 +610,42 @@ def contact_pass(dt, ctl, bodies, elems, pairs, walls, bnd):
         e_count[i] = count + wcount
 
 
+#: the work of an element itself (its loads, gravity, its sums, its post-force part) and
+#: of one of its boundary entries, in listed pairs' worth: the weights by which
+#: :func:`chunk_bounds` evens the threads' chunks (a touching pair costs ~25 ns, a listed
+#: one that does not touch ~5 ns, an element's own part ~30 ns, a boundary entry a
+#: closest-point test and, touching, a force)
+CHUNK_ELEMENT_WEIGHT = 2
+CHUNK_BOUNDARY_WEIGHT = 2
+
+
 @jit
-def chunk_bounds(nchunks, nl_start):
-    """Bounds of ``nchunks`` contiguous element ranges holding about equal numbers of
-    listed pairs (a bisection per bound; balancing by touching contacts as well, an O(n)
-    pass per step, gave no faster step on box_settle)."""
+def chunk_cost(i, nl_start, wl_start):
+    """The modelled work of elements ``0 .. i - 1`` (nondecreasing in ``i``)."""
+    return (nl_start[i] + CHUNK_ELEMENT_WEIGHT * i
+            + CHUNK_BOUNDARY_WEIGHT * wl_start[i])
+
+
+@jit
+def chunk_bounds(nchunks, nl_start, wl_start):
+    """Bounds of ``nchunks`` contiguous element ranges holding about equal work: listed
+    pairs, the elements themselves and their boundary entries (:func:`chunk_cost`; a
+    bisection per bound). By listed pairs alone a scene with few pairs (spheres apart on a
+    mesh floor, a dilute stream) put every element in the last chunk: one thread did all
+    the work. Balancing by touching contacts as well, an O(n) pass per step, gave no
+    faster step on box_settle."""
     n = nl_start.shape[0] - 1
     bounds = np.empty(nchunks + 1, np.int64)
     bounds[0] = 0
     bounds[nchunks] = n
+    total = chunk_cost(n, nl_start, wl_start)
     for c in range(1, nchunks):
-        target = (nl_start[n] * c) // nchunks
+        target = (total * c) // nchunks
         lo = bounds[c - 1]
         hi = n
-        while lo < hi:  # first element whose pairs start at or after the target
+        while lo < hi:  # first element whose work starts at or after the target
             mid = (lo + hi) // 2
-            if nl_start[mid] < target:
+            if chunk_cost(mid, nl_start, wl_start) < target:
                 lo = mid + 1
             else:
                 hi = mid
@@ -681,7 +701,7 @@ def fused_pass(dt, integrate, ctl, bodies, elems, pairs, walls, bnd):
     g0 = gravity[0]
     g1 = gravity[1]
     g2 = gravity[2]
-    bounds = chunk_bounds(nchunks, nl_start)
+    bounds = chunk_bounds(nchunks, nl_start, wl_start)
     for c in prange(nchunks):
         lo = bounds[c]
         hi = bounds[c + 1]
