@@ -72,3 +72,85 @@ def key_order(keys, n_keys):
     """The permutation that sorts entries by ``keys`` (stable; keys in ``0 .. n_keys -
     1``): ``np.argsort(keys, kind="stable")`` by counting."""
     return _bucket(keys, n_keys)[0]
+
+
+@jit
+def mapped_entries(ei, ej, new_el, first_ghost, pairs):
+    """The entries (``ei``, ``ej``) of a migration's pool that a rank's new list keeps,
+    in its new element numbering ``new_el`` (-1: not kept): a pair whose elements are
+    both kept and one of them owned (below ``first_ghost``), as (smaller, larger) with
+    a flag where the two swapped; a boundary entry (``pairs`` False: ``ej`` is the
+    primitive) whose element is kept and owned. Returns (rows, keys, source entry,
+    swapped), in the pool's order."""
+    n = ei.shape[0]
+    rows = np.empty(n, np.int64)
+    keys = np.empty(n, np.int64)
+    src = np.empty(n, np.int64)
+    swapped = np.zeros(n, np.uint8)
+    m = 0
+    for k in range(n):
+        a = new_el[ei[k]]
+        if a < 0:
+            continue
+        if pairs:
+            b = new_el[ej[k]]
+            if b < 0 or min(a, b) >= first_ghost:
+                continue
+            if a > b:
+                a, b = b, a
+                swapped[m] = 1
+        else:
+            if a >= first_ghost:
+                continue
+            b = ej[k]
+        rows[m] = a
+        keys[m] = b
+        src[m] = k
+        m += 1
+    return rows[:m], keys[:m], src[:m], swapped[:m]
+
+
+@jit
+def first_of_equal(rows, keys, order):
+    """``order`` (sorted by row then key) without the later of equal (row, key) entries."""
+    n = order.shape[0]
+    keep = np.empty(n, np.int64)
+    m = 0
+    for x in range(n):
+        t = order[x]
+        if m > 0:
+            u = keep[m - 1]
+            if rows[u] == rows[t] and keys[u] == keys[t]:
+                continue
+        keep[m] = t
+        m += 1
+    return keep[:m]
+
+
+@jit
+def write_entries(take_rows, rows, keys, src, swapped, hist, act, mat, pair_model, flips,
+                  n_rows, key_out, hist_out, act_out, start_out):
+    """Entries ``take_rows`` (of :func:`mapped_entries`' arrays, in list order) into a
+    list's buffers: keys, history rows (their vector floats negated where the pair
+    swapped: ``flips[pair_model[mat[row], mat[key]]]``, as
+    :func:`dpm.parallel.local.orient_pairs`), touching flags, and the CSR start of
+    ``n_rows`` rows. ``swapped`` empty: boundary entries (nothing flips)."""
+    w = hist.shape[1]
+    fw = flips.shape[1]
+    for r in range(n_rows + 1):
+        start_out[r] = 0
+    for x in range(take_rows.shape[0]):
+        t = take_rows[x]
+        s = src[t]
+        key_out[x] = keys[t]
+        act_out[x] = act[s]
+        for c in range(w):
+            hist_out[x, c] = hist[s, c]
+        if swapped.shape[0] > 0 and swapped[t]:  # (the pair's model as it was listed)
+            model = pair_model[mat[keys[t]], mat[rows[t]]]
+            for c in range(min(w, fw)):
+                if flips[model, c]:
+                    hist_out[x, c] = -hist_out[x, c]
+        start_out[rows[t] + 1] += 1
+    for r in range(n_rows):
+        start_out[r + 1] += start_out[r]

@@ -169,6 +169,52 @@ def set_entries(lst: Any, n_rows: int, e: Entries, unique: bool = False) -> None
             lst.t_pair[:m] = key_order(np.ascontiguousarray(j), int(n_rows))
 
 
+def set_mapped_entries(lst: Any, n_rows: int, e: Entries, new_el: np.ndarray,
+                       first_ghost: int, mat: np.ndarray | None = None,
+                       plan: Any = None) -> None:
+    """Make ``lst`` hold the entries ``e`` that a rank keeps, renumbered by ``new_el``
+    (pool element -> new element, -1: dropped): pairs (``mat`` and ``plan`` given) with
+    both elements kept and one owned (below ``first_ghost``), turned to i < j with their
+    vector history negated where they swap; boundary entries (``mat`` None) of owned
+    elements; the first of equal entries only. The same list as :func:`orient_pairs` and
+    :func:`set_entries` (``unique``) after filtering, in compiled passes that copy each
+    history row once (:mod:`dpm.kernels.entry_order`)."""
+    from ..kernels.entry_order import (
+        first_of_equal,
+        key_order,
+        mapped_entries,
+        row_key_order,
+        write_entries,
+    )
+
+    pairs = mat is not None
+    rows, keys, src, swapped = mapped_entries(
+        np.ascontiguousarray(e.i, np.int64), np.ascontiguousarray(e.j, np.int64),
+        np.ascontiguousarray(new_el, np.int64), int(first_ghost), pairs)
+    kept = first_of_equal(rows, keys, row_key_order(rows, keys, int(n_rows)))
+    m = len(kept)
+    lst.start = np.zeros(n_rows + 1, np.int64)
+    if m > lst.capacity:
+        lst.grow(m)
+    if lst.history.shape[1] != e.hist.shape[1]:
+        lst.set_history_width(e.hist.shape[1])
+    if pairs:
+        model, flips = plan.pair_model, plan.history_flips
+    else:
+        model, flips = np.zeros((1, 1), np.int64), np.zeros((1, 1), np.bool_)
+        swapped, mat = swapped[:0], np.zeros(1, np.int64)
+    write_entries(kept, rows, keys, src, swapped, np.ascontiguousarray(e.hist),
+                  np.ascontiguousarray(e.act), np.ascontiguousarray(mat), model, flips,
+                  int(n_rows), lst.key, lst.history, lst.active, lst.start)
+    lst.force[:] = 0.0
+    if isinstance(lst, Contacts):
+        lst.t_start = np.zeros(n_rows + 1, np.int64)
+        if lst.rows:
+            j = lst.key[:m]
+            np.cumsum(np.bincount(j, minlength=n_rows), out=lst.t_start[1:])
+            lst.t_pair[:m] = key_order(j, int(n_rows))
+
+
 @dataclass
 class Pool:
     """Body rows to choose from: body arrays (``Bodies.ARRAYS`` and ``element_start``),
@@ -298,18 +344,9 @@ def assemble(scene: LocalScene, pool: Pool, owned: np.ndarray, ghosts: np.ndarra
     # a ghost's entries among ghosts and with boundaries are its owner's work: an entry is
     # kept where an element of it is owned here (as the rank's list rebuilds keep them)
     first_ghost = int(b.element_start[len(owned)])
-    p = pool.pairs
-    ni, nj = new_el[p.i], new_el[p.j]
-    mask = (ni >= 0) & (nj >= 0) & (np.minimum(ni, nj) < first_ghost)
-    pe = p.where(mask)
-    pe = orient_pairs(Entries(new_el[pe.i], new_el[pe.j], pe.hist, pe.act), e.material,
-                      scene.plan)
-    set_entries(scene.contacts, len(er), pe, unique=True)
-    w = pool.walls
-    wi = new_el[w.i]
-    we = w.where((wi >= 0) & (wi < first_ghost))
-    set_entries(scene.wall_contacts, len(er),
-                Entries(new_el[we.i], we.j, we.hist, we.act), unique=True)
+    set_mapped_entries(scene.contacts, len(er), pool.pairs, new_el, first_ghost,
+                       e.material, scene.plan)
+    set_mapped_entries(scene.wall_contacts, len(er), pool.walls, new_el, first_ghost)
     scene.n_owned = int(len(owned))
     return (pool.take("aux", "", rows, runs), pool.take("vf", "", rows, runs),
             pool.take("wf", "", rows, runs))
