@@ -146,7 +146,7 @@ def orient_pairs(e: Entries, mat: np.ndarray, plan: Any) -> Entries:
 def set_entries(lst: Any, n_rows: int, e: Entries, unique: bool = False) -> None:
     """Make ``lst`` hold exactly the entries ``e`` (sorted by row then key; with
     ``unique``, the first of equal (row, key) entries only), growing it if needed."""
-    from ..kernels.entry_order import key_order, row_key_order
+    from ..kernels.entry_order import row_key_order
 
     o = row_key_order(np.ascontiguousarray(e.i, np.int64), np.ascontiguousarray(e.j),
                       int(n_rows))
@@ -161,12 +161,20 @@ def set_entries(lst: Any, n_rows: int, e: Entries, unique: bool = False) -> None
     if lst.history.shape[1] != e.hist.shape[1]:
         lst.set_history_width(e.hist.shape[1])
     lst._set_entries(i, j, take(e.hist, o), take(e.act, o), n_rows)
+    _transpose(lst, n_rows)
+
+
+def _transpose(lst: Any, n_rows: int) -> None:
+    """A pair list's transposed index (``t_start``, ``t_pair``: the pairs where each
+    element is second, in increasing order) of its entries as they now are."""
+    from ..kernels.entry_order import key_order
+
     if isinstance(lst, Contacts):
         lst.t_start = np.zeros(n_rows + 1, np.int64)
         if lst.rows:
-            m = len(j)
+            j = lst.key[:lst.count]
             np.cumsum(np.bincount(j, minlength=n_rows), out=lst.t_start[1:])
-            lst.t_pair[:m] = key_order(np.ascontiguousarray(j), int(n_rows))
+            lst.t_pair[:len(j)] = key_order(j, int(n_rows))
 
 
 def set_mapped_entries(lst: Any, n_rows: int, e: Entries, new_el: np.ndarray,
@@ -181,7 +189,6 @@ def set_mapped_entries(lst: Any, n_rows: int, e: Entries, new_el: np.ndarray,
     history row once (:mod:`dpm.kernels.entry_order`)."""
     from ..kernels.entry_order import (
         first_of_equal,
-        key_order,
         mapped_entries,
         row_key_order,
         write_entries,
@@ -207,12 +214,7 @@ def set_mapped_entries(lst: Any, n_rows: int, e: Entries, new_el: np.ndarray,
                   np.ascontiguousarray(e.act), np.ascontiguousarray(mat), model, flips,
                   int(n_rows), lst.key, lst.history, lst.active, lst.start)
     lst.force[:] = 0.0
-    if isinstance(lst, Contacts):
-        lst.t_start = np.zeros(n_rows + 1, np.int64)
-        if lst.rows:
-            j = lst.key[:m]
-            np.cumsum(np.bincount(j, minlength=n_rows), out=lst.t_start[1:])
-            lst.t_pair[:m] = key_order(j, int(n_rows))
+    _transpose(lst, n_rows)
 
 
 @dataclass
