@@ -224,7 +224,7 @@ def mesh_scaling(sizes, n_spheres: int = 2000, steps: int = 1000, sphere_steps: 
         args = (e.position, e.radius, sim.skin, wt.frame, wt.kind, wt.par, wt.grid_int,
                 wt.grid_flt, wt.cell_start, wt.cell_items, wt.prim_cells, counts,
                 sim.wall_contacts.start, sim.wall_contacts.start[1:], sim.wall_contacts.key,
-                False, len(e.radius))
+                False, np.arange(len(e.radius)))
         sim.backend.module.boundary_search_pass(*args)
         reps = max(1, int(20000 / len(pos)))
         best = math.inf

@@ -73,7 +73,7 @@ def search_with_and_without_grid(sim, m, skin: float, ghost: int) -> dict:
             starts = np.zeros(len(e.radius) + 1, np.int64)
             args = (e.pos, e.radius, skin, t.frame, t.kind, t.par, t.grid_int, t.grid_flt,
                     t.cell_start, t.cell_items, t.prim_cells, counts, starts, starts[1:],
-                    starts[:0], False, ghost)
+                    starts[:0], False, np.arange(ghost))
             times[name].append(best_us(m.boundary_search_pass, args, 200))
             entries[name] = int(counts.sum())
     assert entries["plain_loop"] == entries["grid"], entries

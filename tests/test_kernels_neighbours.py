@@ -99,6 +99,42 @@ def test_history_follows_pairs_across_rebuild():
     assert kept > 50 and fresh > 0
 
 
+def test_rebuild_from_a_thinned_list_searches_again_only_what_outgrew_its_slot():
+    """After an MPI migration the previous list holds only the touching entries carried:
+    slots sized by it fit most elements but not all. The outgrown elements' rows are
+    searched again on their own; the list is still the double loop's, with the carried
+    history in place and every other row copied from its slot."""
+    rng = np.random.default_rng(21)
+    n = 600
+    pos = rng.uniform(0, 0.04, (n, 3))
+    rad = rng.uniform(0.8e-3, 2.4e-3, n)
+    owner = np.arange(n)
+    skin = 1.5e-3  # (a wide skin: rows of many partners that do not touch)
+    count, start, j, hist = _build(pos, rad, owner, skin)
+    rows = np.repeat(np.arange(n), np.diff(start))
+    partner = j[:count].astype(np.int64)
+    touch = np.linalg.norm(pos[rows] - pos[partner], axis=1) < rad[rows] + rad[partner]
+    kept = np.flatnonzero(touch)
+    thin_start = np.zeros(n + 1, np.int64)
+    thin_start[1:] = np.cumsum(np.bincount(rows[kept], minlength=n))
+    thin_j = np.zeros_like(j)
+    thin_j[:len(kept)] = partner[kept]
+    thin_hist = np.zeros_like(hist)
+    thin_hist[:len(kept), :] = (rows[kept] * 1000 + partner[kept])[:, None]
+    full_counts = np.diff(start)
+    grew = full_counts > np.diff(thin_start) + neighbours.SLOT_SLACK
+    assert 0 < grew.sum() < n // 2  # (both kinds of row are there)
+    count2, start2, j2, hist2 = _build(pos, rad, owner, skin,
+                                       old=(thin_start, thin_j, thin_hist))
+    assert count2 == count
+    assert np.array_equal(start2, start) and np.array_equal(j2[:count], j[:count])
+    carried = set(zip(rows[kept].tolist(), partner[kept].tolist(), strict=True))
+    for k in range(count):
+        i = int(rows[k])
+        want = i * 1000 + j2[k] if (i, int(j2[k])) in carried else 0
+        assert np.all(hist2[k] == want)
+
+
 def test_transpose_lists_second_elements():
     rng = np.random.default_rng(9)
     pos = rng.uniform(0, 0.02, (150, 3))

@@ -170,16 +170,20 @@ def _sorted_copies(e_pos, e_radius, e_owner, order):
 
 
 @pjit
-def _search(sp, so, skin, lo, width, dims, cell_start, order, counts, out_start, out_end,
-            out_j, fill, period, first_ghost):
+def _search(sp, so, skin, lo, width, dims, cell_start, order, visit, counts, out_start,
+            out_end, out_j, fill, period, first_ghost):
     """counts[i] = partners j > i of element i (within r_i + r_j + skin, nearest image).
     With ``fill`` they are also written, sorted, into out_j[out_start[i]:out_end[i]] (as
-    many as fit). Elements are visited in cell order (``sp``, ``so``: cell-ordered copies).
-    Elements from ``first_ghost`` on (an MPI rank's ghosts) list no partners: a pair of two
-    ghosts is its owners' work, and a ghost's pairs with owned elements sit in those rows."""
-    n = sp.shape[0]
+    many as fit). The elements visited are those at the positions ``visit`` of the cell
+    order (``sp``, ``so``: cell-ordered copies): all of them (``arange(n)``), or those whose
+    row a second pass must fill (the others' counts untouched). Elements from
+    ``first_ghost`` on (an MPI rank's ghosts) list no partners: a pair of two ghosts is its
+    owners' work, and a ghost's pairs with owned elements sit in those rows."""
     periodic = period[3] > 0.0 or period[4] > 0.0 or period[5] > 0.0
-    for si in prange(n):
+    # (always a position array, also for all: numba's parfor indexes ``order`` by the loop
+    # index where a branch sets si = q or si = visit[q])
+    for q in prange(visit.shape[0]):
+        si = visit[q]
         i = order[si]
         if i >= first_ghost:
             counts[i] = 0
@@ -319,9 +323,32 @@ def rows_of_counts(counts, slot_start):
 
 
 @jit
+def outgrown(counts, slot_start, order):
+    """The positions s in ``order`` (the search's visiting order) whose element
+    ``order[s]`` found more entries than its slot holds: the only ones a second search
+    pass must visit (in that order)."""
+    m = 0
+    for s in range(order.shape[0]):
+        i = order[s]
+        if counts[i] > slot_start[i + 1] - slot_start[i]:
+            m += 1
+    out = np.empty(m, np.int64)
+    m = 0
+    for s in range(order.shape[0]):
+        i = order[s]
+        if counts[i] > slot_start[i + 1] - slot_start[i]:
+            out[m] = s
+            m += 1
+    return out
+
+
+@jit
 def copy_slots(counts, slot_start, slots, new_start, out):
-    """Each element's filled slot into its exact row."""
+    """Each element's filled slot into its exact row (not an outgrown slot's: a second
+    pass fills those rows)."""
     for i in range(counts.shape[0]):
+        if counts[i] > slot_start[i + 1] - slot_start[i]:
+            continue
         s0 = slot_start[i]
         d0 = new_start[i]
         for k in range(counts[i]):
@@ -337,8 +364,10 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
 
     One search pass writes each element's partners into a transient slot sized by its count
     in the previous list plus ``SLOT_SLACK`` (lists change little between rebuilds); the
-    slots are then copied into the exact rows. If any element outgrew its slot, the rows are
-    sized by that pass's counts and a second pass fills them. The new list and its merged
+    slots are then copied into the exact rows, sized by that pass's counts. The rows of the
+    elements that outgrew their slots are filled by a second pass over those elements only
+    (after an MPI migration the previous list holds only the touching entries carried, and
+    a few elements in a hundred outgrow their slots). The new list and its merged
     history live in scratch arrays of its exact size, allocated here and freed on return
     (numba frees each array after its last use, so the search's scratch is gone before the
     history's is allocated); the list's own arrays are only its capacity.
@@ -357,17 +386,18 @@ def build_neighbour_list(e_pos, e_radius, e_owner, skin, nl_start, nl_j, nl_hist
     counts = np.zeros(n, np.int32)
     slot_start = slot_starts(nl_start, n)
     slots = np.empty(slot_start[n], nl_j.dtype)  # transient: keys only
-    _search(sp, so, skin, lo, width, dims, cell_start, order, counts, slot_start,
+    every = np.arange(n)
+    _search(sp, so, skin, lo, width, dims, cell_start, order, every, counts, slot_start,
             slot_start[1:], slots, n >= 0, period, first_ghost)
     fits, new_start = rows_of_counts(counts, slot_start)
     count = new_start[n]
     if count > cap:
         return count
     new_j = np.empty(count, nl_j.dtype)
-    if fits:
-        copy_slots(counts, slot_start, slots, new_start, new_j)
-    else:  # some element outgrew its slot: fill the exact rows in a second pass
-        _search(sp, so, skin, lo, width, dims, cell_start, order, counts, new_start,
+    copy_slots(counts, slot_start, slots, new_start, new_j)
+    if not fits:  # the elements that outgrew their slots: their exact rows, searched again
+        again = outgrown(counts, slot_start, order)
+        _search(sp, so, skin, lo, width, dims, cell_start, order, again, counts, new_start,
                 new_start[1:], new_j, n >= 0, period, first_ghost)
     new_hist = np.empty((count, nl_hist.shape[1]))
     new_active = np.empty(count, np.uint8)

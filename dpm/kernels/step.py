@@ -46,7 +46,7 @@ from .boundary_search import boundary_motion_since_rebuild, to_local, to_world
 from .mesh_contact import resolve_triangle_contacts
 from .neighbours import _copy_back as copy_back, _merge as merge_history
 from .neighbours import build_neighbour_list, copy_slots, minimum_image, rows_of_counts
-from .neighbours import slot_starts
+from .neighbours import outgrown, slot_starts
 from .rigid_rotation import place_elements
 from .halo import pack_halo, unpack_halo
 from .mpi_calls import mpi_wtime, vote_and_halo
@@ -1022,13 +1022,14 @@ def candidate_distance(kind, par, w, lx, ly, lz, r, reach):
 @pjit
 def boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
                          cell_start, cell_items, prim_cells, counts, out_start, out_end, out_w,
-                         fill, n):
-    """counts[i] = boundary primitives within r + skin of element i, for i < n (the rest
-    untouched). With ``fill`` they are also written, sorted, into
-    out_w[out_start[i]:out_end[i]] (as many as fit: a count above the room says the slot
-    was too small)."""
+                         fill, visit):
+    """counts[i] = boundary primitives within r + skin of element i, for the elements
+    ``visit`` (``arange(n)``: the first n; the rest untouched). With ``fill`` they are also
+    written, sorted, into out_w[out_start[i]:out_end[i]] (as many as fit: a count above the
+    room says the slot was too small)."""
     nb = frame.shape[0]
-    for i in prange(n):
+    for q in prange(visit.shape[0]):
+        i = visit[q]
         k0 = out_start[i] if fill else 0
         room = out_end[i] - k0 if fill else 0
         k = k0
@@ -1089,9 +1090,10 @@ def build_boundary_list(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_
 
     As the pair list (:func:`build_neighbour_list`): one search pass writes each element's
     primitives into a transient slot sized by its entries in the previous list plus
-    ``SLOT_SLACK``, then the slots are copied into the exact rows; only if an element
-    outgrew its slot does a second pass fill rows sized by the first pass' counts (a
-    search pass is most of a rebuild's boundary part: one closest point per candidate).
+    ``SLOT_SLACK``, then the slots are copied into the exact rows, sized by that pass'
+    counts; a second pass fills the rows of the elements that outgrew their slots, and
+    only those (a search pass is most of a rebuild's boundary part: one closest point per
+    candidate).
     The new list is written into scratch arrays of its exact size, freed on return.
 
     Returns the number of entries; above the capacity nothing is changed.
@@ -1102,18 +1104,18 @@ def build_boundary_list(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_
     slots = np.empty(slot_start[n], wl_w.dtype)  # transient: keys only
     boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
                          cell_start, cell_items, prim_cells, counts, slot_start,
-                         slot_start[1:], slots, n >= 0, first_ghost)
+                         slot_start[1:], slots, n >= 0, np.arange(first_ghost))
     fits, new_start = rows_of_counts(counts, slot_start)
     count = new_start[n]
     if count > wl_w.shape[0]:
         return count
     new_w = np.empty(count, wl_w.dtype)
-    if fits:
-        copy_slots(counts, slot_start, slots, new_start, new_w)
-    else:  # some element outgrew its slot: fill the exact rows in a second pass
+    copy_slots(counts, slot_start, slots, new_start, new_w)
+    if not fits:  # the elements that outgrew their slots: their exact rows, searched again
+        again = outgrown(counts, slot_start, np.arange(n))
         boundary_search_pass(e_pos, e_radius, skin, frame, kind, par, grid_int, grid_flt,
                              cell_start, cell_items, prim_cells, counts, new_start,
-                             new_start[1:], new_w, n >= 0, first_ghost)
+                             new_start[1:], new_w, n >= 0, again)
     new_hist = np.empty((count, wl_hist.shape[1]))
     new_active = np.empty(count, np.uint8)
     merge_history(wl_start, wl_w, wl_hist, wl_active, new_start, new_w, new_hist, new_active)
