@@ -20,6 +20,11 @@ turn, and each figure's ratio B/A (above 1: A faster) is the median over the rou
 
     python benchmarks/neighbour_search.py                       # this tree
     python benchmarks/neighbour_search.py --trees /tmp/before . --rounds 3
+    python benchmarks/neighbour_search.py --trees /tmp/before . --same-process
+
+(``--same-process``: one process of tree A times A's rebuild and B's, alternated call by
+call; separate processes meet different memory placements and moments of a shared machine,
+which on small packings can differ by more than a change's effect.)
 
 Writes benchmarks/results/neighbour_search[_TAG].json.
 """
@@ -51,49 +56,90 @@ def fcc(n: int, d: float) -> np.ndarray:
     return ((g[:, None, :] + basis[None]) * a).reshape(-1, 3)[:n]
 
 
-def rebuild_times(p: np.ndarray, d: float, reps: int) -> dict:
-    """Median rebuild time [us] of the packing ``p`` on 1 and 2 threads, and its pairs."""
-    import numba
+def builds(other: str | None) -> list:
+    """The rebuild functions to time: this process's dpm's, and with ``other`` (a source
+    tree) that tree's ``dpm/kernels/neighbours.py`` loaded beside it (its imports resolve
+    to this process's dpm: the two must share ``kernels/config.py`` and the helpers)."""
+    import importlib.util
 
     from dpm.kernels.neighbours import build_neighbour_list
 
-    n = len(p)
-    cap = 16 * n
-    args = (np.ascontiguousarray(p), np.full(n, d / 2), np.arange(n, dtype=np.int64), 0.2 * d,
-            np.zeros(n + 1, np.int64), np.zeros(cap, np.int32), np.zeros((cap, 3)),
-            np.zeros(cap, np.uint8), np.zeros(0, np.int64), np.zeros(0, np.int64),
-            np.zeros(6), n)
-    out: dict = {}
-    for threads in (1, 2):
-        numba.set_num_threads(threads)
-        build_neighbour_list(*args)
-        out["pairs"] = int(build_neighbour_list(*args))
-        times = []
-        for _ in range(reps):
-            t = time.perf_counter()
-            build_neighbour_list(*args)
-            times.append((time.perf_counter() - t) * 1e6)
-        out[str(threads)] = statistics.median(times)
+    out = [build_neighbour_list]
+    if other:
+        name = "dpm.kernels._neighbours_other"
+        spec = importlib.util.spec_from_file_location(
+            name, Path(other) / "dpm" / "kernels" / "neighbours.py")
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod
+        spec.loader.exec_module(mod)
+        out.append(mod.build_neighbour_list)
     return out
 
 
-def settled_times(csv: Path, reps: int) -> dict:
-    """Median rebuild time [us] of the settled bed ``csv`` on 1 and 2 threads, from its own
-    list (``settled``) and from its touching pairs only (``settled_migrated``)."""
+def _timed(fns: list, argsets: list, reps: int, before=None) -> list[float]:
+    """Median seconds x 1e6 of each function on its own arguments, the functions
+    alternated rep by rep (``before(m)``: untimed, before function m's call)."""
+    times: list[list[float]] = [[] for _ in fns]
+    for _ in range(reps):
+        for m, (fn, args) in enumerate(zip(fns, argsets, strict=True)):
+            if before:
+                before(m)
+            t = time.perf_counter()
+            fn(*args)
+            times[m].append((time.perf_counter() - t) * 1e6)
+    return [statistics.median(x) for x in times]
+
+
+def rebuild_times(p: np.ndarray, d: float, reps: int, fns: list) -> list[dict]:
+    """Median rebuild time [us] of the packing ``p`` on 1 and 2 threads, and its pairs,
+    for each rebuild function of ``fns`` (alternated)."""
     import numba
 
-    from dpm.kernels.neighbours import SLOT_SLACK, build_neighbour_list
+    n = len(p)
+    cap = 16 * n
+
+    def fresh():
+        return (np.ascontiguousarray(p), np.full(n, d / 2), np.arange(n, dtype=np.int64),
+                0.2 * d, np.zeros(n + 1, np.int64), np.zeros(cap, np.int32),
+                np.zeros((cap, 3)), np.zeros(cap, np.uint8), np.zeros(0, np.int64),
+                np.zeros(0, np.int64), np.zeros(6), n)
+
+    argsets = [fresh() for _ in fns]
+    outs: list[dict] = [{} for _ in fns]
+    for threads in (1, 2):
+        numba.set_num_threads(threads)
+        for fn, args, out in zip(fns, argsets, outs, strict=True):
+            fn(*args)
+            out["pairs"] = int(fn(*args))
+        for out, us in zip(outs, _timed(fns, argsets, reps), strict=True):
+            out[str(threads)] = us
+    return outs
+
+
+def settled_times(csv: Path, reps: int, fns: list) -> list[dict]:
+    """Median rebuild time [us] of the settled bed ``csv`` on 1 and 2 threads, from its own
+    list (``settled``) and from its touching pairs only (``settled_migrated``), for each
+    rebuild function of ``fns`` (alternated)."""
+    import numba
+
+    from dpm.kernels.neighbours import SLOT_SLACK
 
     data = np.loadtxt(csv, delimiter=",", skiprows=1)
     pos, rad = np.ascontiguousarray(data[:, :3]), data[:, 6].copy()
     n = len(pos)
     cap = 16 * n
-    start, key = np.zeros(n + 1, np.int64), np.zeros(cap, np.int32)
-    args = (pos, rad, np.arange(n, dtype=np.int64), 0.2 * 2 * rad.max(), start, key,
-            np.zeros((cap, 3)), np.zeros(cap, np.uint8), np.zeros(0, np.int64),
-            np.zeros(0, np.int64), np.zeros(6), n)
-    build_neighbour_list(*args)
-    pairs = int(build_neighbour_list(*args))
+
+    def fresh():
+        return (pos, rad, np.arange(n, dtype=np.int64), 0.2 * 2 * rad.max(),
+                np.zeros(n + 1, np.int64), np.zeros(cap, np.int32), np.zeros((cap, 3)),
+                np.zeros(cap, np.uint8), np.zeros(0, np.int64), np.zeros(0, np.int64),
+                np.zeros(6), n)
+
+    argsets = [fresh() for _ in fns]
+    for fn, args in zip(fns, argsets, strict=True):
+        fn(*args)
+        pairs = int(fn(*args))
+    start, key = argsets[0][4], argsets[0][5]
     rows = np.repeat(np.arange(n), np.diff(start))
     partner = key[:pairs].astype(np.int64)
     touch = np.linalg.norm(pos[rows] - pos[partner], axis=1) < rad[rows] + rad[partner]
@@ -101,49 +147,58 @@ def settled_times(csv: Path, reps: int) -> dict:
     thin_start[1:] = np.cumsum(np.bincount(rows[touch], minlength=n))
     thin_key = partner[touch].astype(np.int32)
     grew = np.diff(start) > np.diff(thin_start) + SLOT_SLACK
-    out: dict = {"elements": n, "pairs": pairs, "touching": int(touch.sum()),
-                 "outgrown_after_migration": float(grew.mean())}
+    head = {"elements": n, "pairs": pairs, "touching": int(touch.sum()),
+            "outgrown_after_migration": float(grew.mean())}
+    outs = [dict(head) for _ in fns]
+
+    def thin(m: int) -> None:  # (as a rank's list after a migration: touching pairs only)
+        argsets[m][4][:] = thin_start
+        argsets[m][5][:len(thin_key)] = thin_key
+
     for case in ("settled", "settled_migrated"):
-        res: dict = {"pairs": pairs}
+        res: list[dict] = [{"pairs": pairs} for _ in fns]
         for threads in (1, 2):
             numba.set_num_threads(threads)
-            times = []
-            for _ in range(reps):
-                if case == "settled_migrated":
-                    start[:] = thin_start
-                    key[:len(thin_key)] = thin_key
-                t = time.perf_counter()
-                build_neighbour_list(*args)
-                times.append((time.perf_counter() - t) * 1e6)
-            res[str(threads)] = statistics.median(times)
-        out[case] = res
-    return out
+            us = _timed(fns, argsets, reps, thin if case == "settled_migrated" else None)
+            for r, u in zip(res, us, strict=True):
+                r[str(threads)] = u
+        for out, r in zip(outs, res, strict=True):
+            out[case] = r
+    return outs
 
 
-def worker(k: int, reps: int, settled: str | None = None) -> dict:
-    """Rebuild times [us] of this process's dpm, {order: {threads: us, "pairs": n}}."""
+def worker(k: int, reps: int, settled: str | None = None, other: str | None = None
+           ) -> list[dict]:
+    """Rebuild times [us] of this process's dpm (and of ``other``'s rebuild, alternated in
+    this process), each {order: {threads: us, "pairs": n}}."""
     sys.path.insert(0, str(HERE))
     from scaling import D, scene_arrays
 
     import dpm
 
+    fns = builds(other)
     pos, _, _ = scene_arrays(k, "dense")
     n = len(pos)
-    out: dict = {"elements": n, "dpm": str(Path(dpm.__file__).parent)}
+    outs: list[dict] = [{"elements": n, "dpm": str(Path(dpm.__file__).parent)}]
+    outs += [{"elements": n, "dpm": str(other)}] if other else []
     for order in ORDERS:
         p = fcc(n, D) if order == "fcc_mixed" else pos
         if order != "lattice":
             p = p[np.random.default_rng(1).permutation(n)]
-        out[order] = rebuild_times(p, D, reps)
+        for out, res in zip(outs, rebuild_times(p, D, reps, fns), strict=True):
+            out[order] = res
     if settled:
-        out |= settled_times(Path(settled), reps)
-    return out
+        for out, res in zip(outs, settled_times(Path(settled), reps, fns), strict=True):
+            out |= res
+    return outs
 
 
-def run_tree(tree: Path, k: int, reps: int, settled: Path | None) -> dict:
+def run_tree(tree: Path, k: int, reps: int, settled: Path | None,
+             other: Path | None = None) -> list[dict]:
     env = dict(os.environ, PYTHONPATH=str(tree.resolve()))
     cmd = [sys.executable, __file__, "--worker", "--k", str(k), "--reps", str(reps)]
     cmd += ["--settled", str(settled)] if settled else []
+    cmd += ["--other", str(other.resolve())] if other else []
     done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
     return json.loads(done.stdout.strip().splitlines()[-1])
 
@@ -158,10 +213,15 @@ def main() -> None:
     p.add_argument("--settled", default=None, metavar="NXxNYxNZ",
                    help="also time box_settle's settled bed of this lattice, from its own "
                         "list and from its touching pairs only (as after a migration)")
+    p.add_argument("--same-process", action="store_true",
+                   help="with --trees A B: one process of tree A times A's rebuild and B's "
+                        "(B's neighbours.py loaded beside A's dpm), alternated call by call, "
+                        "so that the two meet the same memory and the same moment")
+    p.add_argument("--other", default=None, help=argparse.SUPPRESS)
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     a = p.parse_args()
     if a.worker:
-        print(json.dumps(worker(a.k, a.reps, a.settled)))
+        print(json.dumps(worker(a.k, a.reps, a.settled, a.other)))
         return
     settled = None
     orders = ORDERS
@@ -175,12 +235,16 @@ def main() -> None:
     trees = a.trees or [HERE.parent]
     rounds = []
     for r in range(a.rounds if a.trees else 1):
-        rounds.append([run_tree(t, a.k, a.reps, settled) for t in trees])
+        if a.same_process and a.trees:
+            rounds.append(run_tree(trees[0], a.k, a.reps, settled, other=trees[1]))
+        else:
+            rounds.append([run_tree(t, a.k, a.reps, settled)[0] for t in trees])
         for t, res in zip(trees, rounds[-1], strict=True):
             print(f"round {r + 1} {t}: " + " | ".join(
                 f"{o} {res[o]['pairs']} pairs: 1 thread {res[o]['1']:.0f} us, "
                 f"2 threads {res[o]['2']:.0f} us" for o in orders), flush=True)
     result: dict = {"k": a.k, "reps": a.reps, "trees": [str(t) for t in trees],
+                    "same_process": bool(a.same_process and a.trees),
                     "settled": str(settled) if settled else None, "rounds": rounds}
     if a.trees:
         result["ratio_b_over_a"] = {
