@@ -984,7 +984,8 @@ def test_candidate_list_matches_brute_force(moved):
     by_owner = {int(sim.walls.owner[wk]) for _, wk in ref}
     assert {0, 1, 2, 3} <= by_owner
     # the first build wrote into slots of SLOT_SLACK entries (the list was empty): elements
-    # with more took the second pass; a rebuild in place fills slots sized by that list
+    # with more took the second pass (over those elements only); a rebuild in place fills
+    # slots sized by that list
     per_element = np.diff(sim.wall_contacts.start)
     assert per_element.max() > SLOT_SLACK
     sim.backend.rebuild()
