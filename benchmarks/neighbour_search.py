@@ -80,12 +80,13 @@ def _timed(fns: list, argsets: list, reps: int, before=None) -> list[float]:
     """Median seconds x 1e6 of each function on its own arguments, the functions
     alternated rep by rep (``before(m)``: untimed, before function m's call)."""
     times: list[list[float]] = [[] for _ in fns]
-    for _ in range(reps):
-        for m, (fn, args) in enumerate(zip(fns, argsets, strict=True)):
+    for rep in range(reps):
+        turn = range(len(fns)) if rep % 2 == 0 else range(len(fns) - 1, -1, -1)
+        for m in turn:  # (the order flips rep by rep: neither goes first always)
             if before:
                 before(m)
             t = time.perf_counter()
-            fn(*args)
+            fns[m](*argsets[m])
             times[m].append((time.perf_counter() - t) * 1e6)
     return [statistics.median(x) for x in times]
 
@@ -136,9 +137,13 @@ def settled_times(csv: Path, reps: int, fns: list) -> list[dict]:
                 np.zeros(6), n)
 
     argsets = [fresh() for _ in fns]
+    found = set()
     for fn, args in zip(fns, argsets, strict=True):
         fn(*args)
-        pairs = int(fn(*args))
+        found.add(int(fn(*args)))
+    if len(found) != 1:
+        raise RuntimeError(f"the trees list different pairs on the settled bed: {found}")
+    pairs = found.pop()
     start, key = argsets[0][4], argsets[0][5]
     rows = np.repeat(np.arange(n), np.diff(start))
     partner = key[:pairs].astype(np.int64)
@@ -149,7 +154,7 @@ def settled_times(csv: Path, reps: int, fns: list) -> list[dict]:
     grew = np.diff(start) > np.diff(thin_start) + SLOT_SLACK
     head = {"elements": n, "pairs": pairs, "touching": int(touch.sum()),
             "outgrown_after_migration": float(grew.mean())}
-    outs = [dict(head) for _ in fns]
+    outs = [{"settled_bed": dict(head)} for _ in fns]
 
     def thin(m: int) -> None:  # (as a rank's list after a migration: touching pairs only)
         argsets[m][4][:] = thin_start
