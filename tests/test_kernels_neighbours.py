@@ -99,18 +99,24 @@ def test_history_follows_pairs_across_rebuild():
     assert kept > 50 and fresh > 0
 
 
-def test_rebuild_from_a_thinned_list_searches_again_only_what_outgrew_its_slot():
+@pytest.mark.parametrize("first_ghost", [None, 450])
+def test_rebuild_from_a_thinned_list_searches_again_only_what_outgrew_its_slot(first_ghost):
     """After an MPI migration the previous list holds only the touching entries carried:
     slots sized by it fit most elements but not all. The outgrown elements' rows are
     searched again on their own; the list is still the double loop's, with the carried
-    history in place and every other row copied from its slot."""
+    history in place and every other row copied from its slot (rows that fill their slot
+    exactly among them; with an MPI rank's ghosts from ``first_ghost`` on, too)."""
     rng = np.random.default_rng(21)
     n = 600
     pos = rng.uniform(0, 0.04, (n, 3))
     rad = rng.uniform(0.8e-3, 2.4e-3, n)
     owner = np.arange(n)
     skin = 1.5e-3  # (a wide skin: rows of many partners that do not touch)
-    count, start, j, hist = _build(pos, rad, owner, skin)
+    count, start, j, hist = _build(pos, rad, owner, skin, first_ghost=first_ghost)
+    cut = n if first_ghost is None else first_ghost
+    ref = {(a, b) for a, b in neighbours.brute_force_pairs(pos, rad, owner, skin, np.zeros(6))
+           if min(a, b) < cut}
+    assert {(i, int(j[k])) for i in range(n) for k in range(start[i], start[i + 1])} == ref
     rows = np.repeat(np.arange(n), np.diff(start))
     partner = j[:count].astype(np.int64)
     touch = np.linalg.norm(pos[rows] - pos[partner], axis=1) < rad[rows] + rad[partner]
@@ -122,10 +128,12 @@ def test_rebuild_from_a_thinned_list_searches_again_only_what_outgrew_its_slot()
     thin_hist = np.zeros_like(hist)
     thin_hist[:len(kept), :] = (rows[kept] * 1000 + partner[kept])[:, None]
     full_counts = np.diff(start)
-    grew = full_counts > np.diff(thin_start) + neighbours.SLOT_SLACK
-    assert 0 < grew.sum() < n // 2  # (both kinds of row are there)
+    room = np.diff(thin_start) + neighbours.SLOT_SLACK
+    assert 0 < (full_counts > room).sum() < n // 2  # (both kinds of row are there)
+    assert (full_counts == room).any()  # (and rows that fill their slot exactly)
     count2, start2, j2, hist2 = _build(pos, rad, owner, skin,
-                                       old=(thin_start, thin_j, thin_hist))
+                                       old=(thin_start, thin_j, thin_hist),
+                                       first_ghost=first_ghost)
     assert count2 == count
     assert np.array_equal(start2, start) and np.array_equal(j2[:count], j[:count])
     carried = set(zip(rows[kept].tolist(), partner[kept].tolist(), strict=True))
