@@ -91,21 +91,23 @@ def _timed(fns: list, argsets: list, reps: int, before=None) -> list[float]:
     return [statistics.median(x) for x in times]
 
 
+def rebuild_args(pos: np.ndarray, rad: np.ndarray, skin: float) -> tuple:
+    """The arguments of ``build_neighbour_list`` for one list of its own (empty, capacity
+    16 pairs an element; no transposed index, no ghosts, not periodic)."""
+    n = len(pos)
+    cap = 16 * n
+    return (pos, rad, np.arange(n, dtype=np.int64), skin, np.zeros(n + 1, np.int64),
+            np.zeros(cap, np.int32), np.zeros((cap, 3)), np.zeros(cap, np.uint8),
+            np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(6), n)
+
+
 def rebuild_times(p: np.ndarray, d: float, reps: int, fns: list) -> list[dict]:
     """Median rebuild time [us] of the packing ``p`` on 1 and 2 threads, and its pairs,
     for each rebuild function of ``fns`` (alternated)."""
     import numba
 
-    n = len(p)
-    cap = 16 * n
-
-    def fresh():
-        return (np.ascontiguousarray(p), np.full(n, d / 2), np.arange(n, dtype=np.int64),
-                0.2 * d, np.zeros(n + 1, np.int64), np.zeros(cap, np.int32),
-                np.zeros((cap, 3)), np.zeros(cap, np.uint8), np.zeros(0, np.int64),
-                np.zeros(0, np.int64), np.zeros(6), n)
-
-    argsets = [fresh() for _ in fns]
+    argsets = [rebuild_args(np.ascontiguousarray(p), np.full(len(p), d / 2), 0.2 * d)
+               for _ in fns]
     outs: list[dict] = [{} for _ in fns]
     for threads in (1, 2):
         numba.set_num_threads(threads)
@@ -128,15 +130,7 @@ def settled_times(csv: Path, reps: int, fns: list) -> list[dict]:
     data = np.loadtxt(csv, delimiter=",", skiprows=1)
     pos, rad = np.ascontiguousarray(data[:, :3]), data[:, 6].copy()
     n = len(pos)
-    cap = 16 * n
-
-    def fresh():
-        return (pos, rad, np.arange(n, dtype=np.int64), 0.2 * 2 * rad.max(),
-                np.zeros(n + 1, np.int64), np.zeros(cap, np.int32), np.zeros((cap, 3)),
-                np.zeros(cap, np.uint8), np.zeros(0, np.int64), np.zeros(0, np.int64),
-                np.zeros(6), n)
-
-    argsets = [fresh() for _ in fns]
+    argsets = [rebuild_args(pos, rad, 0.2 * 2 * rad.max()) for _ in fns]
     found = set()
     for fn, args in zip(fns, argsets, strict=True):
         fn(*args)
