@@ -86,6 +86,7 @@ def locate(sim: Any, el: int) -> str:
 def unstable(sim: Any, what: str) -> UnstableRunError:
     """The error of an unstable run, with the time-step figures; the output is flushed
     and closed first, so every frame written so far stays readable."""
+    getattr(sim.backend, "sync_host", lambda: None)()  # (the failing state, on the host)
     rep = sim.time_step_report() if np.all(np.isfinite(sim.bodies.velocity)) else None
     hint = ""
     if rep is not None and rep.contact_time is not None:

@@ -259,6 +259,16 @@ def check(sim: Any) -> None:
     """The guards after a kernel call (see :class:`Guards`)."""
     g = sim.guards
     b = sim.bodies
+    be = sim.backend
+    if getattr(be, "host_stale", False) and len(b):
+        # (the host is behind the backend's state: ask the backend whether a guard
+        # would find anything, and bring the host up only then)
+        box = sim._scene_box
+        if box is None:
+            box = sim._scene_box = scene_box(sim)
+        if not be.guard_hits(g.nonfinite != "off", box if g.escape != "off" else None):
+            return
+        be.sync_host()
     if g.nonfinite != "off" and len(b):
         name, rows = nonfinite_bodies(b)
         if len(rows):

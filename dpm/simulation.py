@@ -899,6 +899,9 @@ class Simulation:
         chunk = self._first_chunk()
         if hasattr(self.backend, "agree_chunk"):
             chunk = self.backend.agree_chunk(chunk)
+        # (the host state is brought up to the backend's before anything between calls
+        # reads or changes it, and at the run's end: an MPI backend gathers then only)
+        sync = getattr(self.backend, "sync_host", lambda: None)
         try:
             while done < nsteps:
                 n = min(nsteps - done, chunk)
@@ -907,27 +910,33 @@ class Simulation:
                 for due in self._due_steps():
                     n = min(n, due - self.step_count)
                 if per_step_hooks:
+                    sync()
                     call_hook(self._registry, "dpm_before_step", sim=self)
                 t0 = _time.perf_counter()
                 ran = self._advance(n)
                 elapsed = _time.perf_counter() - t0
                 done += ran
                 if per_step_hooks:
+                    sync()
                     call_hook(self._registry, "dpm_after_step", sim=self)
                 if self._next_sort is not None and self.step_count >= self._next_sort:
+                    sync()
                     self.backend.sort_due()
                     self._schedule_sort()
                 if self._flow_every and self.step_count >= self._next_flow:
                     self._next_flow += self._flow_every
+                    sync()
                     population.flow_event(self)
                     self._schedule_sort()  # (an inlet may grow the scene past SORT_FROM)
                 if self._writer is not None and self.step_count >= self._next_output:
                     self._next_output += self._output_every
                     self._write_frame()
-                if self._switches:
+                if self._switches and switches.next_step(self) <= self.step_count:
+                    sync()
                     switches.apply_due(self)
                 if self._checkpoints is not None and \
                         self.step_count >= self._checkpoints.next_step:
+                    sync()
                     self._checkpoints.write(self)
                 bar.update(ran, self.time)
                 # aim at ~0.1 s of work per call (Python runs only at these events), and
@@ -941,6 +950,7 @@ class Simulation:
                     chunk = int(min(max(chunk * min(aim / elapsed, 4.0), 1), 100000))
                 if hasattr(self.backend, "agree_chunk"):  # (MPI: the same on every rank)
                     chunk = self.backend.agree_chunk(chunk)
+            sync()
         finally:
             bar.close()
             if self._writer is not None:
@@ -1021,6 +1031,8 @@ class Simulation:
                 break
         self.step_count += total
         self._update_boundary_loads()
+        if res.status != STATUS_OK:  # (the diagnosis reads the host state)
+            getattr(self.backend, "sync_host", lambda: None)()
         if res.status == STATUS_NAN:
             self._fail("a position became NaN")
         if res.status == STATUS_INTEGRATOR:
@@ -1059,6 +1071,7 @@ class Simulation:
                            w.frame[k, 12:15].copy(), w.frame[k, 15:18].copy())
 
     def _write_frame(self) -> None:
+        getattr(self.backend, "sync_host", lambda: None)()
         self._writer.write(self)
         self._last_frame_step = self.step_count
         call_hook(self._registry, "dpm_on_output", sim=self, frame=self._writer.frames - 1,

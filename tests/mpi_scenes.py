@@ -5,10 +5,10 @@
     mpiexec -n 3 python tests/mpi_scenes.py SCENE OUT.npz --restart PATH
 
 Rank 0 writes the end state by body id (position, velocity, angular velocity,
-orientation), the boundary loads, the outlet records and, per call, each rank's owned
-bodies, step time, halo time, and the re-cuts, calls and rebuilds without a migration
-so far. Every scene but ``sticky`` (JKR) uses Hertz-Mindlin and velocity
-Verlet (the step modules the rest of the suite compiles).
+orientation), the boundary loads, the outlet and escape records and, per call, each
+rank's owned bodies, step time, halo time, and the re-cuts, kernel calls, rebuilds
+without a migration and whole-state gathers so far. Every scene but ``sticky`` (JKR)
+uses Hertz-Mindlin and velocity Verlet (the step modules the rest of the suite compiles).
 
 Scenes:
 
@@ -26,6 +26,8 @@ Scenes:
 - ``crash``: two spheres meeting head-on across x = 0 too fast for the overlap limit,
   beside spheres resting on the floor: the run stops on every rank at the serial step
   with the serial diagnosis (the driver records the step and the message).
+- ``escape``: a sphere thrown across x = 0 and out of the scene's box beside spheres
+  resting on a floor: the escape guard removes it on every rank.
 """
 
 from __future__ import annotations
@@ -219,8 +221,25 @@ def crash(kind: str):
     return sim, 1000
 
 
+def escape(kind: str):
+    """Spheres resting on a floor on both sides of x = 0, and one thrown across x = 0 at
+    4 m/s that leaves the scene's box (the escape guard's) after some 730 steps: removed
+    and recorded in ``sim.escaped`` on every rank, found on the ranks' state between
+    calls (the host is gathered only then)."""
+    sim, glass, steel = _sim(device(kind, True))
+    sim.add_boundary("plane", material=steel, point=(0, 0, 0), normal=(0, 0, 1))
+    r = 1e-3
+    # (not symmetric about the origin: the floor's torque about it is not zero, and
+    # its comparison not one of round-off against zero)
+    rest = [[x, y, r - 1e-6] for x in (-6e-3, -3e-3, 2e-3, 7e-3) for y in (-4e-3, 5e-3)]
+    sim.add_particles("sphere", material=glass, positions=rest, radius=r)
+    sim.add_particles("sphere", material=glass, radius=r, positions=[[-3e-3, 0.0, 5e-3]],
+                      velocities=[[4.0, 0.0, 0.0]])
+    return sim, 1000
+
+
 SCENES = {"settle": settle, "corner": corner, "slide": slide, "flow": flow,
-          "gather": gather, "sticky": sticky, "crash": crash}
+          "gather": gather, "sticky": sticky, "crash": crash, "escape": escape}
 
 
 def tilt_gravity(sim: dpm.Simulation) -> None:
@@ -241,6 +260,7 @@ def state(sim: dpm.Simulation) -> dict[str, np.ndarray]:
     removed = [o.records for o in sim.outlets] if sim.outlets else []
     out["removed_ids"] = (np.sort(np.concatenate([r["id"] for r in removed]))
                           if removed else np.zeros(0, np.int64))
+    out["escaped_ids"] = np.sort(np.asarray(sim.escaped.records["id"], np.int64))
     return out
 
 
@@ -301,11 +321,12 @@ def main(argv: list[str] | None = None) -> int:
             rows = MPI.COMM_WORLD.allgather([t.get("owned", len(sim.bodies)),
                                              t.get("steps_s", 0.0), t.get("halo_s", 0.0),
                                              tot.get("recuts", 0), tot.get("calls", 0),
-                                             tot.get("migrations_skipped", 0)])
+                                             tot.get("migrations_skipped", 0),
+                                             tot.get("gathers", 0)])
             per_call.append(rows)
     wall = time.perf_counter() - t0
     res = state(sim)
-    res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 6))
+    res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 7))
     res["wall_s"] = np.array(wall)
     res["loop_used"] = np.array(getattr(sim.backend, "loop_used", ""))
     res["stopped_at"], res["stopped_why"] = np.array(stopped[0]), np.array(stopped[1])

@@ -18,6 +18,8 @@ oversubscribed) against one process, under ``mpiexec`` (scenes in ``tests/mpi_sc
   exactly: bodies with clustered elements, contact entries with their history (the pack
   and unpack functions called directly, no mpiexec);
 - an overlap past the limit stops every rank at the serial step with its diagnosis;
+- a kernel call ends without gathering the whole state (a run gathers at its end, at
+  output frames, flow events and hooks); the guards between calls read the ranks' state;
 - a serial run never imports mpi4py; unsupported requests are refused by name.
 """
 
@@ -132,6 +134,31 @@ def test_same_trajectories_as_one_process(scene, ranks, tmp_path):
         # rebuilds where no body changed rank and no ghost layer changed ran the halo
         # instead of a migration (and still gave the serial trajectories above)
         assert got["per_call"][-1, 0, 5] > 0, got["per_call"][:, 0, 5]
+
+
+@needs_mpi
+def test_calls_end_without_gathering_the_whole_state(tmp_path):
+    """A kernel call ends without gathering the ranks' state into the host: a run
+    without output, flow events or hooks gathers once, at its end (two runs of several
+    calls each: two gathers), and ends as in serial."""
+    got = parallel("settle", 2, tmp_path, "--calls", "2")
+    assert_same(serial("settle"), got)
+    calls, gathers = got["per_call"][:, 0, 4], got["per_call"][:, 0, 6]
+    assert calls[-1] > 2, calls  # (several kernel calls in a run)
+    np.testing.assert_array_equal(gathers, [1, 2])
+
+
+@needs_mpi
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_guards_between_calls_read_the_ranks_state(ranks, tmp_path):
+    """The escape guard between calls looks at the ranks' state (the host is not
+    gathered after a call): a sphere thrown across x = 0 and out of the scene is found
+    there, gathered, removed on every rank and recorded, and the rest ends as in serial."""
+    ref = serial("escape")
+    assert len(ref["escaped_ids"]) == 1 and len(ref["id"]) == 8
+    got = parallel("escape", ranks, tmp_path)
+    np.testing.assert_array_equal(got["escaped_ids"], ref["escaped_ids"])
+    assert_same(ref, got)
 
 
 @needs_mpi

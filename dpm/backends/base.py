@@ -20,7 +20,12 @@ is the same bit for bit as ``n`` calls of :meth:`step`.
 
 Reductions (:meth:`max_speed`, :meth:`max_overlap`, :meth:`nan_count`,
 :meth:`boundary_loads`, :meth:`contact_count`) are what the run loop asks between calls;
-an MPI backend reduces them over ranks, a GPU backend on the device. :meth:`to_host` and
+an MPI backend reduces them over ranks, a GPU backend on the device. Optional (the run
+loop asks with ``getattr``, so a backend without them keeps working): ``sync_host()``
+brings ``sim.bodies`` up to date where calls leave the host behind (an MPI backend
+gathers the ranks' rows only when the run loop needs them: output, flow events, hooks, a
+run's end), with ``host_stale`` saying whether they did, and ``guard_hits(nonfinite,
+box)`` answers the run-time guards from the backend's own state. :meth:`to_host` and
 :meth:`from_host` move the state to and from ``sim.bodies`` (and the other containers) for
 output, hooks, flow events and checkpoints; for the CPU backend they are no-ops (the host
 arrays are the state).

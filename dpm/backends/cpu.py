@@ -511,6 +511,21 @@ class CpuBackend:
                                           w.par, w.owner, w.frame)
 
     # ------------------------------------------------------------------ state transfer
+    #: whether ``sim.bodies`` (and the contact lists) are older than the backend's state
+    #: (an MPI backend between a run's calls); the CPU backend's host arrays are its state
+    host_stale = False
+
+    def sync_host(self) -> None:
+        """Bring the host's state up to the backend's before anything reads or changes
+        it (the run loop calls it at events and at a run's end; collective across MPI
+        ranks). The CPU backend's host arrays are its state: nothing to do."""
+
+    def guard_hits(self, nonfinite: bool, box: np.ndarray | None) -> bool:
+        """Whether the run-time guards would find anything (a non-finite state value, a
+        centre outside ``box``) without reading the host: a backend whose host is stale
+        answers from its own state; here the host is the state, so look there (True)."""
+        return True
+
     def to_host(self) -> None:
         """The host arrays are the state: nothing to copy."""
 

@@ -180,6 +180,9 @@ class MpiBackend(CpuBackend):
         self._old_boxes = self._times = None
         self._hp: dict = {}
         self._gather_scratch: Scratch | None = None
+        #: the host state (``sim.bodies``, the contact lists) is older than the ranks':
+        #: the calls since the last :meth:`sync_host` left it where it was
+        self._stale = False
 
     def __getstate__(self) -> dict[str, Any]:
         state = super().__getstate__()
@@ -187,11 +190,12 @@ class MpiBackend(CpuBackend):
                   "_gather_scratch"):
             state[k] = None
         state["_hp"] = {}
+        state["_stale"] = False
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         # (checkpoints written before the compiled loop: its attributes at defaults)
-        super().__setstate__({"loop": "auto", "loop_used": "", "_hp": {},
+        super().__setstate__({"loop": "auto", "loop_used": "", "_hp": {}, "_stale": False,
                               "touching_weight": self.TOUCHING_WEIGHT, "_fit_samples": []}
                              | state)
 
@@ -260,6 +264,7 @@ class MpiBackend(CpuBackend):
 
     # ------------------------------------------------------------------ host changes
     def attach(self, sim: Any) -> None:
+        self.sync_host()
         if self.ranks > 1:
             if sim.integrator.implicit:
                 raise ParameterError(f"Simulation(device='mpi'): the implicit "
@@ -269,22 +274,27 @@ class MpiBackend(CpuBackend):
         self._reset_local()
 
     def rebuild(self) -> None:
+        self.sync_host()
         super().rebuild()
         self._host_copy = None
 
     def population_changed(self) -> None:
+        self.sync_host()
         super().population_changed()
         self._reset_local()
 
     def prime(self) -> None:
+        self.sync_host()
         super().prime()
         self._host_copy = None
 
     def keep_bodies(self, keep_b: np.ndarray) -> None:
+        self.sync_host()
         super().keep_bodies(keep_b)
         self._reset_local()
 
     def permute_bodies(self, order: np.ndarray) -> None:
+        self.sync_host()
         super().permute_bodies(order)
         self._reset_local()
 
@@ -315,13 +325,19 @@ class MpiBackend(CpuBackend):
         # the modelled cost (the same on every rank: the host state is) or their step
         # times drifted apart by more than ``rebalance``
         times = comm.allgather(self._step_time)
-        same = comm.allreduce(int(self._host_unchanged()), op=MPI.MIN)
+        # (a stale host was left as it was: nothing between the calls changed it, since
+        # whatever changes the host gathers it first, :meth:`sync_host`)
+        same = comm.allreduce(int(self._stale or self._host_unchanged()), op=MPI.MIN)
         t_scatter = time.perf_counter()
         # (by the measure the cut evens: with weight "cost" the step times differ where
-        # the model is off, and a cut by cost alone would not change)
+        # the model is off, and a cut by cost alone would not change; the cost is the
+        # host's, so a stale host leaves it to the re-cut check at the next list rebuild,
+        # :meth:`_recut_in_call`)
         recut = self.fixed_boxes is None and self.boxes is not None and (
-            dec.imbalance(times) if self.weight == "time"
-            else self._cost_imbalance()) > self.rebalance
+            dec.imbalance(times) > self.rebalance if self.weight == "time"
+            else not self._stale and self._cost_imbalance() > self.rebalance)
+        if recut:
+            self.sync_host()  # (the cut is made from the whole host state)
         if not same or recut:
             if same:  # a re-cut (with weight "time": by each rank's measured step time)
                 self._times = np.asarray(times, float)
@@ -460,8 +476,13 @@ class MpiBackend(CpuBackend):
         t_steps = time.perf_counter() - t_start
         t_work += work
         self._step_time = t_work / max(ran, 1)  # (in the step kernels: no waits)
+        # the call's end: the boundary loads summed over the ranks; the whole state stays
+        # on the ranks until the host needs it (:meth:`sync_host`: an output frame, a
+        # flow event, a hook, the run's end)
         t0 = time.perf_counter()
-        worst_e = self._gather()
+        self._sum_loads()
+        self._stale = True
+        worst_e = self._host_element(int(inner.diag[5]))
         self.timing = {"steps": ran, "steps_s": t_steps, "halo_s": t_halo,
                        "migrate_s": t_mig, "gather_s": time.perf_counter() - t0,
                        "scatter_s": t_scatter, "owned": loc.n_owned,
@@ -979,10 +1000,9 @@ class MpiBackend(CpuBackend):
         return mig.unpack(rcounts, rf, ri)
 
     # ------------------------------------------------------------------ gather
-    def _gather(self) -> int:
+    def _gather(self) -> None:
         """Every rank's owned rows (state, integrator rows, element references, contact
-        entries whose first element it owns) into the whole host state on every rank;
-        returns the host element of this rank's largest overlap (-1: none)."""
+        entries whose first element it owns) into the whole host state on every rank."""
         sim = self.sim
         loc, inner = self.local, self.inner
         b, e = loc.bodies, loc.elements
@@ -1034,19 +1054,99 @@ class MpiBackend(CpuBackend):
         pairs = orient_pairs(pairs, he.material, sim.plan)
         set_entries(sim.contacts, len(he), pairs)
         set_entries(sim.wall_contacts, len(he), walls)
-        # boundary loads (force, torque, work): the sum of every rank's owned elements
-        load = sim.walls.load
-        if load.size:
-            total = np.empty_like(load)
-            self.comm.Allreduce(np.ascontiguousarray(load), total, op=MPI.SUM)
-            load[:] = total
         self.diag[6] = int(np.count_nonzero(sim.contacts.active[:sim.contacts.count])
                            + np.count_nonzero(sim.wall_contacts.active[
                                :sim.wall_contacts.count]))
         self._host_copy = tuple(np.array(a) for a in (
             hb.position, hb.velocity, hb.angular_velocity, hb.orientation, hb.mass))
-        w = int(inner.diag[5])
-        return int(gel[w]) if 0 <= w < len(gel) else -1
+
+    def _sum_loads(self) -> None:
+        """The boundary loads (force, torque, work) of every rank's owned elements summed
+        into each rank's (shared with the host's ``sim.walls.load``)."""
+        from mpi4py import MPI
+
+        load = self.sim.walls.load
+        if load.size:
+            total = np.empty_like(load)
+            self.comm.Allreduce(np.ascontiguousarray(load), total, op=MPI.SUM)
+            load[:] = total
+
+    def _host_element(self, w: int) -> int:
+        """The host element of this rank's element ``w`` (-1: none). The host's layout
+        (ids, element starts) is current even while its state is stale."""
+        e, b = self.local.elements, self.local.bodies
+        if not 0 <= w < len(e.owner):
+            return -1
+        k = int(e.owner[w])
+        hb = self.sim.bodies
+        row = np.flatnonzero(hb.id == b.id[k])
+        if not len(row):
+            return -1
+        return int(hb.element_start[row[0]] + w - b.element_start[k])
+
+    # ------------------------------------------------------------------ the host state
+    @property
+    def host_stale(self) -> bool:
+        """Whether ``sim.bodies`` and the contact lists are older than the ranks' state
+        (the calls since the last :meth:`sync_host`)."""
+        return self._stale
+
+    def sync_host(self) -> None:
+        """Gather the ranks' state into the host containers if calls ran since the last
+        gather (collective: the run loop calls it on every rank at the same points,
+        before anything reads or changes the host state, and at a run's end). A call
+        ends without it, so a run without output, flow events or hooks between its
+        calls gathers once, at its end (HOOMD-blue's snapshot taken on demand, the same
+        idea)."""
+        if not self._stale:
+            return
+        t0 = time.perf_counter()
+        self._stale = False
+        self._gather()
+        took = time.perf_counter() - t0
+        for figures in (self.timing, self.totals):
+            figures["gather_s"] = figures.get("gather_s", 0.0) + took
+            figures["gathers"] = figures.get("gathers", 0) + 1
+
+    def max_speed(self) -> tuple[int, float]:
+        """(host row, speed) of the fastest body; over the ranks' owned bodies while the
+        host is stale (a non-finite velocity anywhere gives inf)."""
+        if not self._stale:
+            return super().max_speed()
+        from mpi4py import MPI
+
+        from ..diagnosis import fastest_body
+
+        loc = self.local
+        no = loc.n_owned
+        k, speed = fastest_body(loc.bodies.velocity[:no]) if no else (0, 0.0)
+        speed = float(speed) if np.isfinite(speed) else np.inf
+        best, who = self.comm.allreduce((speed, self.rank), op=MPI.MAXLOC)
+        ident = self.comm.bcast(int(loc.bodies.id[k]) if no else -1, root=who)
+        row = np.flatnonzero(self.sim.bodies.id == ident)
+        return (int(row[0]) if len(row) else 0), best
+
+    def guard_hits(self, nonfinite: bool, box: np.ndarray | None) -> bool:
+        """Whether the run-time guards (:func:`dpm.guards.check`) would find anything on
+        the ranks' owned bodies: a non-finite state value (``nonfinite``), a centre
+        outside ``box`` (None: not asked). Collective; read from the ranks' state, so a
+        stale host need not be gathered to learn that all is well."""
+        from mpi4py import MPI
+
+        from ..guards import STATE_ARRAYS
+
+        b, no = self.local.bodies, self.local.n_owned
+        hit = False
+        if nonfinite:
+            hit = not all(np.isfinite(getattr(b, name)[:no]).all() for name in STATE_ARRAYS)
+        if box is not None and not hit:
+            p = b.position[:no]
+            hit = bool(np.any((p < box[0]) | (p > box[1])))
+        return bool(self.comm.allreduce(int(hit), op=MPI.MAX))
+
+    def nan_count(self) -> int:
+        self.sync_host()
+        return super().nan_count()
 
     def _id_rows(self, ids: np.ndarray) -> np.ndarray:
         out = np.full(int(ids.max()) + 1 if len(ids) else 1, -1, np.int64)
@@ -1055,6 +1155,7 @@ class MpiBackend(CpuBackend):
 
     # ------------------------------------------------------------------ reductions
     def contact_count(self) -> int:
+        self.sync_host()
         return int(self.diag[6])
 
 
