@@ -17,11 +17,13 @@ Per step, on each of P ranks holding n = N / P particles (box_settle-like packin
                                            counted whole as if not overlapped)
     migrate  = mu * n / r                  mu: cost per particle of a rebuild's
                                            migration, r: steps between rebuilds
-    gather   = sigma * N / s               sigma: cost per particle of the whole-state
-                                           gather and scatter at a call's ends, s: steps
-                                           per call (a call lasts 50 times its gather,
-                                           at least 1 s and at most 30 s:
-                                           ``MpiBackend.call_aim``)
+    gather   = sigma * N / s               sigma: cost per particle of a whole-state
+                                           gather (with the scatters), s: steps between
+                                           gathers. A kernel call ends without one: the
+                                           host is gathered where the run loop needs it
+                                           (``MpiBackend.sync_host``): at output frames,
+                                           flow events, hooks and a run's end, so s is
+                                           the steps between frames (``--frame-every``)
 
     efficiency = c N / (P * step)
 
@@ -30,7 +32,10 @@ the measured slab ghost layer turned into a cube's six faces; alpha, beta are th
 typical InfiniBand cluster (2 us, 10 GB/s) and alpha_r = 2 us. Writes
 ``results/mpi_model.json``.
 
-    python benchmarks/mpi_model.py [--scaling results/mpi_scaling.json]
+    python benchmarks/mpi_model.py [--scaling results/mpi_scaling.json] [--frame-every 1000]
+
+Calibrations on runs written before calls ended without a gather (no ``gathers`` in the
+JSON's rank rows) count one gather per call, as those runs did.
 """
 
 from __future__ import annotations
@@ -41,7 +46,6 @@ import math
 from pathlib import Path
 
 from dpm.kernels.halo import HALO_WIDTH as FLOATS_PER_GHOST
-from dpm.parallel.backend import MpiBackend
 
 HERE = Path(__file__).resolve().parent
 ALPHA, BETA, ALPHA_R = 2e-6, 10e9, 2e-6
@@ -61,7 +65,8 @@ def calibrate(scaling: dict) -> dict:
     # a slab's one ghost face holds n^(2/3) * w particles: w in particle spacings
     w = g_slab * n ** (1 / 3)
     rebuilds = max(r["rebuilds"] for r in ranks)
-    calls = max(r["calls"] for r in ranks)
+    # (whole-state gathers in the timed run: one per call before calls ended without one)
+    gathers = max(r.get("gathers", r["calls"]) for r in ranks)
     return {
         "particles_calibrated_on": row["particles"], "c_s": c,
         "overhead_per_step_s": fast["halo_s"] / steps,
@@ -70,13 +75,14 @@ def calibrate(scaling: dict) -> dict:
         / max(rebuilds, 1) / n,
         "steps_per_rebuild": steps / max(rebuilds, 1),
         "gather_per_particle_s": sum(r["gather_s"] + r["scatter_s"] for r in ranks)
-        / len(ranks) / max(calls, 1) / row["particles"],
-        "call_aim_s": MpiBackend.CALL_AIM, "gather_share": MpiBackend.GATHER_SHARE,
-        "call_aim_max_s": MpiBackend.CALL_AIM_MAX,
+        / len(ranks) / max(gathers, 1) / row["particles"],
+        "gathers_calibrated_on": gathers,
     }
 
 
-def step_time(cal: dict, N: float, P: int) -> dict:
+def step_time(cal: dict, N: float, P: int, frame_every: float) -> dict:
+    """One rank's step time and the efficiency, a whole-state gather every
+    ``frame_every`` steps (an output frame; ``inf``: none but a run's end, not counted)."""
     n = N / P
     g = cal["k_g_3d"] * n ** (-1 / 3)
     compute = cal["c_s"] * n * (1 + g)
@@ -85,11 +91,7 @@ def step_time(cal: dict, N: float, P: int) -> dict:
     reduce = ALPHA_R * math.log2(P)
     migrate = cal["migrate_per_particle_s"] * n / cal["steps_per_rebuild"]
     base = compute + halo + reduce + migrate
-    gather_call = cal["gather_per_particle_s"] * N
-    call_s = min(max(cal.get("call_aim_s", 1.0), cal.get("gather_share", 0.0) * gather_call),
-                 cal.get("call_aim_max_s", 1.0))
-    steps_per_call = max(1.0, call_s / base)
-    gather = gather_call / steps_per_call
+    gather = cal["gather_per_particle_s"] * N / frame_every
     total = base + gather
     parts = {"compute": compute, "halo": halo, "reduce": reduce, "migrate": migrate,
              "gather": gather}
@@ -102,28 +104,30 @@ def step_time(cal: dict, N: float, P: int) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scaling", default=str(HERE / "results" / "mpi_scaling.json"))
+    ap.add_argument("--frame-every", type=float, default=1000.0,
+                    help="steps between output frames (each gathers the whole state)")
+    ap.add_argument("--out", default=str(HERE / "results" / "mpi_model.json"))
     a = ap.parse_args()
     cal = calibrate(json.loads(Path(a.scaling).read_text()))
-    rows = [step_time(cal, N, P) for N in (1e6, 1e7, 1e8, 1e9) for P in (2, 64, 256, 1024)]
-    # the same without the whole-state gather (each rank keeping only its own rows)
-    distributed = [dict(step_time({**cal, "gather_per_particle_s": 0.0}, N, P),
-                        note="host state distributed") for N in (1e7, 1e8, 1e9)
-                   for P in (64, 256, 1024)]
-    out = {"calibration": cal, "assumed": {"alpha_s": ALPHA, "beta_B_per_s": BETA,
-                                          "allreduce_alpha_s": ALPHA_R,
-                                          "neighbours": NEIGHBOURS_3D},
-           "prediction": rows, "prediction_distributed_host_state": distributed}
-    (HERE / "results" / "mpi_model.json").write_text(json.dumps(out, indent=1))
+    grid = [(N, P) for N in (1e6, 1e7, 1e8, 1e9) for P in (2, 64, 256, 1024)]
+    rows = [step_time(cal, N, P, a.frame_every) for N, P in grid]
+    # the same with no frame during the run (one gather at its end, not counted): what
+    # a distributed host state (each rank keeping only its own rows, output written
+    # collectively) would give with frames too
+    no_frames = [dict(step_time(cal, N, P, math.inf), note="no frames")
+                 for N, P in grid]
+    out = {"scaling": a.scaling, "frame_every_steps": a.frame_every, "calibration": cal,
+           "assumed": {"alpha_s": ALPHA, "beta_B_per_s": BETA,
+                       "allreduce_alpha_s": ALPHA_R, "neighbours": NEIGHBOURS_3D},
+           "prediction": rows, "prediction_no_frames": no_frames}
+    Path(a.out).write_text(json.dumps(out, indent=1))
     print(json.dumps(cal, indent=1))
     print(f"{'N':>8} {'P':>5} {'n/rank':>9} {'ghosts':>7} {'eff':>6} {'loss':>8} "
-          f"{'GB/rank':>8}   (distributed host state: eff)")
-    dist = {(r["particles"], r["ranks"]): r for r in distributed}
-    for r in rows:
-        d = dist.get((r["particles"], r["ranks"]))
+          f"{'GB/rank':>8}   (no frames: eff, loss)")
+    for r, d in zip(rows, no_frames, strict=True):
         print(f"{r['particles']:8.0e} {r['ranks']:5d} {r['per_rank']:9.3g} "
               f"{r['ghost_fraction']:7.2f} {r['efficiency']:6.2f} {r['largest_loss']:>8} "
-              f"{r['memory_per_rank_GB']:8.2f}   "
-              f"{'' if d is None else format(d['efficiency'], '.2f')}")
+              f"{r['memory_per_rank_GB']:8.2f}   {d['efficiency']:.2f} {d['largest_loss']}")
 
 
 if __name__ == "__main__":

@@ -183,6 +183,8 @@ def write(sim: Simulation, path: str | os.PathLike) -> Path:
     path = Path(path)
     if path.is_dir():
         raise ParameterError(f"sim.checkpoint(): path={str(path)!r} is a directory")
+    # (MPI: the ranks' state into the host first; every rank calls this)
+    getattr(sim.backend, "sync_host", lambda: None)()
     if not getattr(sim.backend, "root", True):
         return path  # (MPI: every rank holds the whole state; rank 0 writes it)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -101,8 +101,10 @@ class EnergyBook:
 
     def balance(self, sim: Any) -> dict[str, float]:
         """initial, work, inserted, removed, current (E), kinetic and dissipated (D above)
-        [J]."""
-        kin, now = energies(sim.bodies, sim.gravity)
+        [J] (the bodies' energies from the backend: :meth:`CpuBackend.energies`, summed
+        over the ranks' owned rows by an MPI backend between a run's calls)."""
+        ask = getattr(sim.backend, "energies", None)
+        kin, now = ask(sim.gravity) if ask is not None else energies(sim.bodies, sim.gravity)
         w = self.work(sim)
         return {"initial": self.initial, "work": w, "inserted": self.inserted,
                 "removed": self.removed, "current": now, "kinetic": kin,
@@ -260,16 +262,18 @@ def check(sim: Any) -> None:
     g = sim.guards
     b = sim.bodies
     be = sim.backend
+    look = True  # (whether the host's state is to be searched)
     if getattr(be, "host_stale", False) and len(b):
         # (the host is behind the backend's state: ask the backend whether a guard
         # would find anything, and bring the host up only then)
         box = sim._scene_box
-        if box is None:
+        if box is None:  # (a scene changed by a hook: the box of the current state)
+            be.sync_host()
             box = sim._scene_box = scene_box(sim)
-        if not be.guard_hits(g.nonfinite != "off", box if g.escape != "off" else None):
-            return
-        be.sync_host()
-    if g.nonfinite != "off" and len(b):
+        look = be.guard_hits(g.nonfinite != "off", box if g.escape != "off" else None)
+        if look:
+            be.sync_host()
+    if look and g.nonfinite != "off" and len(b):
         name, rows = nonfinite_bodies(b)
         if len(rows):
             from .scene_check import few
@@ -279,7 +283,7 @@ def check(sim: Any) -> None:
             if g.nonfinite == "stop" or {"position", "velocity"} & set(name.split(", ")):
                 raise sim._failure(msg)
             g.warn_once("nonfinite", f"step {sim.step_count} (t = {sim.time:.6g} s): {msg}")
-    if g.escape != "off" and len(b):
+    if look and g.escape != "off" and len(b):
         box = sim._scene_box
         if box is None:
             box = sim._scene_box = scene_box(sim)

@@ -874,6 +874,8 @@ class Simulation:
         hooks = self._registry.manager.hook
         per_step_hooks = bool(hooks.dpm_before_step.get_hookimpls()
                               or hooks.dpm_after_step.get_hookimpls())
+        if hasattr(self.backend, "agree_any"):  # (MPI: a hook on any rank, steps on all)
+            per_step_hooks = self.backend.agree_any(per_step_hooks)
         root = getattr(self.backend, "root", True)  # (MPI: rank 0 writes and reports)
         bar = Progress(nsteps, self.dt, self.time, enabled=progress if root else False)
         if self._output_path is not None and self._writer is None:
@@ -975,7 +977,7 @@ class Simulation:
         """Steps of a run's first kernel call: 10, or, after an earlier run, what its last
         call's seconds per step and body predict for the aim (at most 4x that call's
         steps), so that a script running many short runs does not ramp its calls up from
-        10 steps every time (across MPI ranks each call ends in a whole-state gather)."""
+        10 steps every time (across MPI ranks each call ends in a collective vote)."""
         if self._call_rate is None:
             return 10
         rate, last = self._call_rate

@@ -223,7 +223,7 @@ def crash(kind: str):
 
 def escape(kind: str):
     """Spheres resting on a floor on both sides of x = 0, and one thrown across x = 0 at
-    4 m/s that leaves the scene's box (the escape guard's) after some 730 steps: removed
+    4 m/s that leaves the scene's box (the escape guard's) after some 750 steps: removed
     and recorded in ``sim.escaped`` on every rank, found on the ranks' state between
     calls (the host is gathered only then)."""
     sim, glass, steel = _sim(device(kind, True))
@@ -235,7 +235,9 @@ def escape(kind: str):
     sim.add_particles("sphere", material=glass, positions=rest, radius=r)
     sim.add_particles("sphere", material=glass, radius=r, positions=[[-3e-3, 0.0, 5e-3]],
                       velocities=[[4.0, 0.0, 0.0]])
-    return sim, 1000
+    # (5,000 steps: a call is at most 4x the one before, so in one run of these steps
+    # the call in which it leaves ends before the run's end, however calls are sized)
+    return sim, 5000
 
 
 SCENES = {"settle": settle, "corner": corner, "slide": slide, "flow": flow,
@@ -246,6 +248,27 @@ def tilt_gravity(sim: dpm.Simulation) -> None:
     """Gravity tilted 30 degrees about y, and every body's spin reversed (between runs)."""
     sim.gravity = (G * 0.5, 0.0, -G * np.sqrt(0.75))
     sim.bodies.angular_velocity[:] *= -1.0
+
+
+def reductions(sim: dpm.Simulation) -> dict[str, np.ndarray]:
+    """What the run loop asks between calls (energies, the fastest body, the guards'
+    hits), answered from the host and, the host marked stale (right after a run's
+    gather the ranks' owned rows are the host's rows), from the ranks' rows."""
+    from dpm.guards import energies
+
+    be, b = sim.backend, sim.bodies
+    k = int(np.argmax(b.position[:, 0]))  # (a box that leaves out the body furthest in x)
+    lo, hi = b.position.min(axis=0) - 1.0, b.position.max(axis=0) + 1.0
+    cut = np.array([lo, [b.position[k, 0] - 1e-9, hi[1], hi[2]]])
+    out = {"host_energies": np.array(energies(b, sim.gravity)),
+           "host_fastest": np.array(be.max_speed())}
+    be._stale = True
+    out["ranks_energies"] = np.array(be.energies(sim.gravity))
+    out["ranks_fastest"] = np.array(be.max_speed())
+    out["ranks_hits"] = np.array([be.guard_hits(True, np.array([lo, hi])),
+                                  be.guard_hits(False, cut), be.guard_hits(False, None)])
+    be._stale = False
+    return out
 
 
 def state(sim: dpm.Simulation) -> dict[str, np.ndarray]:
@@ -260,7 +283,9 @@ def state(sim: dpm.Simulation) -> dict[str, np.ndarray]:
     removed = [o.records for o in sim.outlets] if sim.outlets else []
     out["removed_ids"] = (np.sort(np.concatenate([r["id"] for r in removed]))
                           if removed else np.zeros(0, np.int64))
-    out["escaped_ids"] = np.sort(np.asarray(sim.escaped.records["id"], np.int64))
+    rec = sim.escaped.records
+    out["escaped_ids"] = np.sort(np.asarray(rec["id"], np.int64))
+    out["escaped_time"] = np.asarray(rec["time"], float).max(initial=-1.0)
     return out
 
 
@@ -280,6 +305,9 @@ def main(argv: list[str] | None = None) -> int:
                     "value: every sim.run one call)")
     ap.add_argument("--tilt-gravity", action="store_true",
                     help="tilt gravity half-way (a script changing the scene between runs)")
+    ap.add_argument("--reductions", action="store_true",
+                    help="at the end, the between-calls reductions of the ranks' rows "
+                    "against the gathered host's")
     args = ap.parse_args(argv)
     if args.restart:
         sim = dpm.restart(args.restart)
@@ -326,6 +354,8 @@ def main(argv: list[str] | None = None) -> int:
             per_call.append(rows)
     wall = time.perf_counter() - t0
     res = state(sim)
+    if args.reductions:
+        res.update(reductions(sim))
     res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 7))
     res["wall_s"] = np.array(wall)
     res["loop_used"] = np.array(getattr(sim.backend, "loop_used", ""))

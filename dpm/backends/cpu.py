@@ -520,6 +520,12 @@ class CpuBackend:
         it (the run loop calls it at events and at a run's end; collective across MPI
         ranks). The CPU backend's host arrays are its state: nothing to do."""
 
+    def energies(self, gravity: np.ndarray) -> tuple[float, float]:
+        """(kinetic, mechanical) energy [J] of the bodies (:func:`dpm.guards.energies`)."""
+        from ..guards import energies
+
+        return energies(self.sim.bodies, gravity)
+
     def guard_hits(self, nonfinite: bool, box: np.ndarray | None) -> bool:
         """Whether the run-time guards would find anything (a non-finite state value, a
         centre outside ``box``) without reading the host: a backend whose host is stale

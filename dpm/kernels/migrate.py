@@ -1,6 +1,6 @@
 """Message packing for migration and gather: rows of body, element and contact arrays
 into the flat float64 and int64 buffers of the MPI backend's buffer-call messages
-(mpi4py's ``Ialltoallv`` at a list rebuild, ``Iallgatherv`` at a call's end), and back
+(mpi4py's ``Ialltoallv`` at a list rebuild, ``Iallgatherv`` at a whole-state gather), and back
 (:mod:`dpm.parallel.messages` lays the messages out; :mod:`dpm.parallel.backend` sends
 them).
 
@@ -79,7 +79,7 @@ def put_segments(buf, starts, counts, width, col, rows, dst):
 
 @inline_jit
 def reported_entry(i, j, gel, ne_own, pair):
-    """Whether a rank reports entry (i, j) at a call's end: a pair by the rank owning the
+    """Whether a rank reports entry (i, j) in a whole-state gather: a pair by the rank owning the
     element that comes first in host numbering, a boundary entry by its element's."""
     if pair:
         first = i if gel[i] < gel[j] else j

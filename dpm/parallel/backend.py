@@ -2,11 +2,15 @@
 
 Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton off``):
 
-- **Between kernel calls the host state is whole on every rank.** ``sim.bodies``, the
-  elements and both contact lists hold the whole scene, so everything the run loop does
-  between calls (flow events, output, checkpoints, hooks, guards, diagnosis) runs as on
-  one process, the same on every rank; only rank 0 writes files. A call scatters the
-  host state into each rank's sub-domain and gathers it back at its end: each rank sends
+- **The host state is whole on every rank where the run loop reads it.** A call
+  scatters the host state into each rank's sub-domain (when it changed) and ends
+  without gathering it back (:attr:`host_stale`); :meth:`sync_host` gathers it where the
+  run loop needs it (output frames, flow events, hooks, switches, checkpoints, a
+  failure's diagnosis, each run's end), so those run as on one process, the same on
+  every rank, with ``sim.bodies``, the elements and both contact lists holding the whole
+  scene; only rank 0 writes files. Between calls the guards, the tunnelling check and
+  the energy book are reductions of the ranks' owned rows (:meth:`guard_hits`,
+  :meth:`max_speed`, :meth:`energies`). A gather: each rank sends
   its owned rows (state, the integrator's rows, element references, the contact entries
   it reports, with history) to all as one float64 and one int64 buffer
   (:class:`dpm.parallel.messages.Gather`; the counts by ``Allgather``, the payloads by
@@ -162,7 +166,8 @@ class MpiBackend(CpuBackend):
         #: vote (NaN, rebuild, the last step's overlap) with the halo exchange
         #: (``halo_s``; it holds this rank's wait for the slowest one's forces too), in
         #: the overlap vote of a call's last step (``wait_s``), migrating
-        #: at rebuilds (the list rebuild included), gathering at the end,
+        #: at rebuilds (the list rebuild included), the call's end (the loads' sum) with
+        #: any whole-state gather after it (``gather_s``; ``gathers`` counts those),
         #: scattering at the start; owned bodies and ghosts; halo bytes sent per step
         self.timing: dict[str, float] = {}
         #: the same figures summed over the calls (``reset_totals()`` starts again)
@@ -236,10 +241,10 @@ class MpiBackend(CpuBackend):
     #: benchmarks/mpi_ab.py``'s split of the tree before.)
     TOUCHING_WEIGHT = 0.5
 
-    #: a call gathers the whole state at its end (and scatters it at its start when the
-    #: host state changed): calls aim at ``CALL_AIM`` seconds of work and at least
-    #: ``GATHER_SHARE``-fold the last call's gather and scatter, at most ``CALL_AIM_MAX``
-    #: (events, output frames and the end of a run still end a call where they fall)
+    #: calls aim at ``CALL_AIM`` seconds of work and at least ``GATHER_SHARE``-fold the
+    #: last call's gather (where one followed it: an event, a run's end) and scatter, at
+    #: most ``CALL_AIM_MAX`` (events, output frames and the end of a run still end a call
+    #: where they fall)
     CALL_AIM = 1.0
     GATHER_SHARE = 50.0
     CALL_AIM_MAX = 30.0
@@ -247,8 +252,8 @@ class MpiBackend(CpuBackend):
     @property
     def call_aim(self) -> float:
         """Seconds of work the run loop aims each kernel call at: with one rank as one
-        process; with several, long enough that the whole-state gather at the call's end
-        costs at most ~2 % (at 1e6 spheres it takes ~1 s a call)."""
+        process; with several, long enough that a whole-state gather after the call (an
+        event's or the run's end) costs at most ~2 % (at 1e6 spheres it takes ~1 s a call)."""
         if self.ranks == 1:
             return 0.1
         t = self.timing.get("gather_s", 0.0) + self.timing.get("scatter_s", 0.0)
@@ -1143,6 +1148,39 @@ class MpiBackend(CpuBackend):
             p = b.position[:no]
             hit = bool(np.any((p < box[0]) | (p > box[1])))
         return bool(self.comm.allreduce(int(hit), op=MPI.MAX))
+
+    def energies(self, gravity: np.ndarray) -> tuple[float, float]:
+        """(kinetic, mechanical) energy [J]: while the host is stale, of each rank's owned
+        rows summed over the ranks (collective; the sum's order is not serial's, so the
+        last bits may differ)."""
+        if not self._stale:
+            return super().energies(gravity)
+        from types import SimpleNamespace
+
+        from mpi4py import MPI
+
+        from ..guards import energies
+
+        b, no = self.local.bodies, self.local.n_owned
+        mine = energies(SimpleNamespace(**{k: getattr(b, k)[:no] for k in (
+            "mass", "velocity", "orientation", "angular_velocity", "inertia",
+            "position")}), gravity)
+        total = np.empty(2)
+        self.comm.Allreduce(np.array(mine, float), total, op=MPI.SUM)
+        return float(total[0]), float(total[1])
+
+    def agree_any(self, flag: bool) -> bool:
+        """Whether ``flag`` holds on any rank (collective): a decision that leads to a
+        collective call (a per-step hook's gather) is taken alike on every rank."""
+        if self.ranks == 1:
+            return bool(flag)
+        from mpi4py import MPI
+
+        return bool(self.comm.allreduce(int(bool(flag)), op=MPI.MAX))
+
+    def to_host(self) -> None:
+        """The whole state into the host containers (:meth:`sync_host`)."""
+        self.sync_host()
 
     def nan_count(self) -> int:
         self.sync_host()

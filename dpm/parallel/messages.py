@@ -1,4 +1,5 @@
-"""The MPI backend's messages at a list rebuild (migration) and at a call's end (gather):
+"""The MPI backend's messages at a list rebuild (migration) and where the host state is
+gathered (:meth:`dpm.parallel.backend.MpiBackend.sync_host`):
 their layout in one float64 and one int64 buffer each, and their packing and unpacking
 (numba kernels of :mod:`dpm.kernels.migrate`). :mod:`dpm.parallel.backend` sends them with
 mpi4py's buffer calls: the counts first (``Ialltoall``/``Allgather`` of four int64 per
@@ -276,7 +277,7 @@ class Migration:
 
 
 class Gather:
-    """The messages of a call's end (module docstring): this rank's owned rows to every
+    """The messages of a whole-state gather (module docstring): this rank's owned rows to every
     rank, unpacked into the host state. ``n_aux``: the integrator's columns;
     ``positions``: whether element positions travel (not for spheres, whose element
     position is the body's); ``wp``, ``ww``: history columns of pairs and boundary
