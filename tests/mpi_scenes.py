@@ -7,8 +7,9 @@
 Rank 0 writes the end state by body id (position, velocity, angular velocity,
 orientation), the boundary loads, the outlet and escape records and, per call, each
 rank's owned bodies, step time, halo time, and the re-cuts, kernel calls, rebuilds
-without a migration and whole-state gathers so far. Every scene but ``sticky`` (JKR)
-uses Hertz-Mindlin and velocity Verlet (the step modules the rest of the suite compiles).
+without a migration, whole-state gathers and bodies that changed rank so far. Every
+scene but ``sticky`` (JKR) uses Hertz-Mindlin and velocity Verlet (the step modules the
+rest of the suite compiles).
 
 Scenes:
 
@@ -350,13 +351,14 @@ def main(argv: list[str] | None = None) -> int:
                                              t.get("steps_s", 0.0), t.get("halo_s", 0.0),
                                              tot.get("recuts", 0), tot.get("calls", 0),
                                              tot.get("migrations_skipped", 0),
-                                             tot.get("gathers", 0)])
+                                             tot.get("gathers", 0),
+                                             tot.get("migrants", 0)])
             per_call.append(rows)
     wall = time.perf_counter() - t0
     res = state(sim)
     if args.reductions:
         res.update(reductions(sim))
-    res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 7))
+    res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 8))
     res["wall_s"] = np.array(wall)
     res["loop_used"] = np.array(getattr(sim.backend, "loop_used", ""))
     res["stopped_at"], res["stopped_why"] = np.array(stopped[0]), np.array(stopped[1])
