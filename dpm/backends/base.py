@@ -24,8 +24,9 @@ an MPI backend reduces them over ranks, a GPU backend on the device. Optional (t
 loop asks with ``getattr``, so a backend without them keeps working): ``sync_host()``
 brings ``sim.bodies`` up to date where calls leave the host behind (an MPI backend
 gathers the ranks' rows only when the run loop needs them: output, flow events, hooks, a
-run's end), with ``host_stale`` saying whether they did, and ``guard_hits(nonfinite,
-box)`` answers the run-time guards from the backend's own state. :meth:`to_host` and
+run's end), with ``host_stale`` saying whether they did; ``guard_hits(nonfinite,
+box)`` and ``energies(gravity)`` answer the run-time guards and the energy book from the
+backend's own state. :meth:`to_host` and
 :meth:`from_host` move the state to and from ``sim.bodies`` (and the other containers) for
 output, hooks, flow events and checkpoints; for the CPU backend they are no-ops (the host
 arrays are the state).
