@@ -494,7 +494,6 @@ class MpiBackend(CpuBackend):
         t0 = time.perf_counter()
         self._sum_loads()
         self._stale = True
-        worst_e = self._host_element(int(inner.diag[5]))
         self.timing = {"steps": ran, "steps_s": t_steps, "halo_s": t_halo,
                        "migrate_s": t_mig, "gather_s": time.perf_counter() - t0,
                        "scatter_s": t_scatter, "owned": loc.n_owned,
@@ -517,7 +516,9 @@ class MpiBackend(CpuBackend):
         best = comm.allreduce((float(inner.diag[4]), self.rank), op=MPI.MAXLOC)
         d = self.diag
         d[4] = max(d[4], best[0])
-        d[5] = comm.bcast(worst_e, root=best[1])
+        # (the host element of the largest overlap: mapped by the rank that has it)
+        d[5] = comm.bcast(self._host_element(int(inner.diag[5])) if self.rank == best[1]
+                          else -1, root=best[1])
         d[1] = ran
         return StepResult(ran, status, rebuilds, float(best[0]), int(d[5]))
 
@@ -1165,16 +1166,11 @@ class MpiBackend(CpuBackend):
         last bits may differ)."""
         if not self._stale:
             return super().energies(gravity)
-        from types import SimpleNamespace
-
         from mpi4py import MPI
 
         from ..guards import energies
 
-        b, no = self.local.bodies, self.local.n_owned
-        mine = energies(SimpleNamespace(**{k: getattr(b, k)[:no] for k in (
-            "mass", "velocity", "orientation", "angular_velocity", "inertia",
-            "position")}), gravity)
+        mine = energies(self.local.bodies, gravity, slice(0, self.local.n_owned))
         total = np.empty(2)
         self.comm.Allreduce(np.array(mine, float), total, op=MPI.SUM)
         return float(total[0]), float(total[1])
