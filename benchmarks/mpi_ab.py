@@ -66,7 +66,7 @@ def main() -> None:
     args = ap.parse_args()
     rates: dict[str, list[float]] = {"a": [], "b": []}
     # seconds per run in each part, mean of the ranks (the medians are compared)
-    parts = ("migrate_s", "gather_s", "halo_s", "work_s")
+    parts = ("migrate_s", "relist_s", "gather_s", "halo_s", "work_s")
     part_s: dict[str, dict[str, list[float]]] = {k: {p: [] for p in parts} for k in "ab"}
     last: dict[str, dict] = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -83,7 +83,8 @@ def main() -> None:
                     print(key, f"{res['particle_steps_per_s']:.4g}", flush=True)
     med = {k: statistics.median(v) for k, v in rates.items()}
     split = {k: [{f: round(row.get(f, 0.0), 4) for f in
-                  ("steps_s", "work_s", "halo_s", "wait_s", "migrate_s", "gather_s",
+                  ("steps_s", "work_s", "halo_s", "wait_s", "migrate_s", "relist_s",
+                   "gather_s",
                    "scatter_s",
                    "calls", "rebuilds", "recuts", "owned", "ghosts", "touching_weight")}
                  for row in last[k]["ranks"]] for k in last}

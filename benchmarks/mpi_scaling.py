@@ -232,8 +232,12 @@ def shares(res: dict) -> dict:
     if not rows or "steps_s" not in rows[0]:
         return {}
     mean = {k: sum(r.get(k, 0.0) for r in rows) / len(rows)
-            for k in ("steps_s", "halo_s", "wait_s", "migrate_s", "gather_s", "scatter_s")}
+            for k in ("steps_s", "halo_s", "wait_s", "migrate_s", "relist_s", "gather_s",
+                      "scatter_s")}
     return {"halo_share": mean["halo_s"] / wall, "migrate_share": mean["migrate_s"] / wall,
+            # (of the migration's share: the list rebuild after it, which one process
+            # does too; recorded since stop 49, 0 in older results)
+            "relist_share": mean["relist_s"] / wall,
             "gather_scatter_share": (mean["gather_s"] + mean["scatter_s"]) / wall,
             # (the overlap vote after a call's last step; until NOTES row 66 the vote after
             # every step's forces, a rank waiting for the slowest one's forces, which now

@@ -6,11 +6,20 @@ import numpy as np
 
 
 def to_body(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Rotate world vectors v into the body frames of quaternions q (R(q)^T v)."""
-    w, x, y, z = q.T
-    qv = np.stack([-x, -y, -z], axis=1)  # conjugate
-    t = 2.0 * np.cross(qv, v)
-    return v + w[:, None] * t + np.cross(qv, t)
+    """Rotate world vectors v into the body frames of quaternions q (R(q)^T v):
+    v + w t + u x t with t = 2 u x v, u = -(x, y, z) the conjugate's vector part, written
+    out by components (the same numbers as with ``np.cross``, in about half the time: the
+    energy guard asks this of every body at every kernel call's end)."""
+    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    v0, v1, v2 = v[:, 0], v[:, 1], v[:, 2]
+    t0 = 2.0 * (z * v1 - y * v2)
+    t1 = 2.0 * (x * v2 - z * v0)
+    t2 = 2.0 * (y * v0 - x * v1)
+    out = np.empty(np.shape(v))
+    out[:, 0] = v0 + w * t0 + (z * t1 - y * t2)
+    out[:, 1] = v1 + w * t1 + (x * t2 - z * t0)
+    out[:, 2] = v2 + w * t2 + (y * t0 - x * t1)
+    return out
 
 
 def kinetic_energy(b) -> float:

@@ -352,13 +352,15 @@ def main(argv: list[str] | None = None) -> int:
                                              tot.get("recuts", 0), tot.get("calls", 0),
                                              tot.get("migrations_skipped", 0),
                                              tot.get("gathers", 0),
-                                             tot.get("migrants", 0)])
+                                             tot.get("migrants", 0),
+                                             tot.get("migrate_s", 0.0),
+                                             tot.get("relist_s", 0.0)])
             per_call.append(rows)
     wall = time.perf_counter() - t0
     res = state(sim)
     if args.reductions:
         res.update(reductions(sim))
-    res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 8))
+    res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 10))
     res["wall_s"] = np.array(wall)
     res["loop_used"] = np.array(getattr(sim.backend, "loop_used", ""))
     res["stopped_at"], res["stopped_why"] = np.array(stopped[0]), np.array(stopped[1])
