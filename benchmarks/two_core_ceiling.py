@@ -8,7 +8,7 @@ turn (``numba.set_num_threads``), in a compiled loop of many calls (no dispatch 
 at 2e3 to 2e5 elements:
 
 - ``stream``: a half kick and a drift (``v += f dt``, ``x += v dt``) over n x 3 arrays: the
-  memory traffic of an integrator's part, ~10 ns an element;
+  memory traffic of an integrator's part, ~4 ns an element;
 - ``compute``: 20 sines an element, no memory traffic to speak of.
 
 Gain = time on one thread / time on two, the median of ``--rounds`` alternated rounds.
