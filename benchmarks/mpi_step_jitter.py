@@ -87,7 +87,6 @@ def worker(lat: list[int], steps: int, out: str, packing: str) -> None:
 
     be.module = Timed()
     be._compile_in_turn = lambda *a, **k: None  # (compiled in the warm-up)
-    interior = []
     t0 = time.perf_counter()
     sim.run(steps=steps, progress=False)
     wall = time.perf_counter() - t0
@@ -96,7 +95,7 @@ def worker(lat: list[int], steps: int, out: str, packing: str) -> None:
     c = loc.contacts
     first_ghost = int(loc.bodies.element_start[loc.n_owned])
     keys = c.key[:c.count]
-    interior.append(float(np.mean(keys < first_ghost)) if len(keys) else 1.0)
+    interior = float(np.mean(keys < first_ghost)) if len(keys) else 1.0
     pre = np.array([t for k, t in times if k == 0])
     frc = np.array([t for k, t in times if k == 1])
     n = min(len(pre), len(frc))
@@ -104,7 +103,7 @@ def worker(lat: list[int], steps: int, out: str, packing: str) -> None:
 
     comm = MPI.COMM_WORLD
     rows = comm.gather({"pre_s": pre[:n].tolist(), "forces_s": frc[:n].tolist(),
-                        "interior_share": interior[0], "owned": int(loc.n_owned),
+                        "interior_share": interior, "owned": int(loc.n_owned),
                         "ghosts": int(loc.bodies.ghosts), "wall_s": wall,
                         "halo_s": float(be.totals.get("halo_s", 0.0))}, root=0)
     if comm.rank == 0:
