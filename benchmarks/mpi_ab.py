@@ -84,9 +84,9 @@ def main() -> None:
     med = {k: statistics.median(v) for k, v in rates.items()}
     split = {k: [{f: round(row.get(f, 0.0), 4) for f in
                   ("steps_s", "work_s", "halo_s", "wait_s", "migrate_s", "relist_s",
-                   "gather_s",
-                   "scatter_s",
-                   "calls", "rebuilds", "recuts", "owned", "ghosts", "touching_weight")}
+                   "gather_s", "scatter_s", "calls", "rebuilds", "migrations_skipped",
+                   "migrants", "recuts", "owned", "ghosts", "halo_bytes_per_step",
+                   "touching_weight")}
                  for row in last[k]["ranks"]] for k in last}
     out = {"a": str(args.a), "b": str(args.b), "lattice": args.lattice,
            "steps": args.steps, "ranks": args.ranks, "particle_steps_per_s": rates,

@@ -45,9 +45,9 @@ def worker(lat: list[int], steps: int, out: str) -> None:
     times: list[float] = []
     original = MpiBackend._migrate
 
-    def timed(self):
+    def timed(self, *args, **kw):
         t = time.perf_counter()
-        original(self)
+        original(self, *args, **kw)
         times.append(time.perf_counter() - t)
 
     MpiBackend._migrate = timed

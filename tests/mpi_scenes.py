@@ -241,8 +241,21 @@ def escape(kind: str):
     return sim, 5000
 
 
+def rod(kind: str):
+    """A rod (a cylinder cluster 12 mm long along x) whose centre lies just right of
+    x = 0, its tip 5.5 mm left of it, and a sphere flying along x into that tip from
+    the left: the rank that owns the rod holds the sphere as a ghost only if the ghost
+    layer counts the rod's length as well as the sphere's size."""
+    sim, glass, steel = _sim(device(kind, True), gravity=(0.0, 0.0, 0.0))
+    sim.add_particles("cylinder", material=glass, positions=[[5e-4, 0.0, 0.0]], r=1e-3,
+                      l=12e-3)
+    sim.add_particles("sphere", material=glass, radius=1e-3,
+                      positions=[[-12e-3, 2e-4, 1e-4]], velocities=[[1.0, 0.0, 0.0]])
+    return sim, 1200
+
+
 SCENES = {"settle": settle, "corner": corner, "slide": slide, "flow": flow,
-          "gather": gather, "sticky": sticky, "crash": crash, "escape": escape}
+          "gather": gather, "sticky": sticky, "crash": crash, "escape": escape, "rod": rod}
 
 
 def tilt_gravity(sim: dpm.Simulation) -> None:

@@ -91,6 +91,43 @@ def test_one_pass_owner_and_ghost_ranks_match_the_box_geometry():
         assert near.any() and not near[owner, np.arange(len(p))].any()
 
 
+def test_ghost_cover_check_matches_the_box_geometry():
+    """The test a list rebuild asks before it keeps every row where it is: how far a
+    rank's bodies lie outside its box, and which of its bodies another rank's next lists
+    need (within reach + that rank's stray distance of its box) but it does not hold;
+    against numpy's distances, periodic images included."""
+    from dpm.kernels.domain import stray_distance, uncovered_ghosts
+
+    rng = np.random.default_rng(5)
+    p = rng.uniform(-1.0, 1.0, (4000, 3))
+    boxes = dec.bisect(p, np.ones(len(p)), 3, cell=0.01)
+    reach = rng.uniform(0.0, 0.2, len(p))
+    for period in (None, np.array([-1.0, -1.0, -1.0, 2.0, 0.0, 2.0])):
+        per = np.zeros(6) if period is None else period
+        owner = dec.owner_of(p, boxes)
+        for me in range(3):
+            pts = np.ascontiguousarray(p[owner == me] + rng.normal(0, 0.02, (
+                int(np.sum(owner == me)), 3)))  # (moved a little since the cut)
+            d_own = dec.distance_to_box(pts, boxes[me], period)
+            assert stray_distance(pts, boxes[me], per) == pytest.approx(d_own.max())
+            if period is None:  # (a box open to infinity holds an image of every point)
+                assert d_own.max() > 0.0
+            strays = rng.uniform(0.0, 0.05, 3)
+            r = reach[:len(pts)]
+            need = np.array([dec.distance_to_box(pts, boxes[k], period) <= r + strays[k]
+                             for k in range(3)])
+            need[me] = False
+            sent = need.copy()
+            assert uncovered_ghosts(pts, boxes, per, r, strays, me, sent) == 0
+            drop = np.flatnonzero(need.any(axis=0))[:7]
+            for i in drop:
+                sent[np.flatnonzero(need[:, i])[0], i] = False
+            assert uncovered_ghosts(pts, boxes, per, r, strays, me, sent) == len(drop)
+            # more held than needed covers too
+            assert uncovered_ghosts(pts, boxes, per, r, strays, me,
+                                    np.ones_like(sent)) == 0
+
+
 def test_pool_rows_read_across_head_and_tail_without_joining_them():
     """A migration's pool reads a rank's own rows (the head) and the rows it received
     (the tail) as one numbering; runs of rows kept in place are copied as blocks."""

@@ -5,7 +5,8 @@ oversubscribed) against one process, under ``mpiexec`` (scenes in ``tests/mpi_sc
   velocity, orientation; boundary force, torque and work; the outlet's records), with no
   body lost or duplicated while bodies cross faces, edges, the corner where three and four
   sub-domains meet, and periodic faces;
-- a cube cluster straddling that corner feels the serial force;
+- a cube cluster straddling that corner feels the serial force; a rod whose centre lies
+  on one rank feels a sphere hitting its tip far inside the other;
 - contact history survives migration: a spinning sphere sliding obliquely across a face
   and two spheres in a sliding contact crossing it together end as in serial;
 - a checkpoint of a 2-rank run restarts on 3 ranks and on one process, and one of one
@@ -117,7 +118,8 @@ def assert_same(ref: dict, got: dict, tol: float = 1e-10) -> None:
 @needs_mpi
 @pytest.mark.parametrize("scene,ranks", [("settle", 2), ("settle", 3), ("corner", 2),
                                          ("corner", 3), ("corner", 4), ("slide", 2),
-                                         ("slide", 3), ("flow", 2), ("sticky", 2)])
+                                         ("slide", 3), ("flow", 2), ("sticky", 2),
+                                         ("rod", 2)])
 def test_same_trajectories_as_one_process(scene, ranks, tmp_path):
     got = parallel(scene, ranks, tmp_path)
     assert_same(serial(scene), got)

@@ -91,3 +91,41 @@ def copy_runs(head, tail, width, starts, sources, lengths, out):
         else:
             s = (r - nh) * width
             out[d:d + size] = tail[s:s + size]
+
+
+@jit
+def stray_distance(points, box, period):
+    """The largest distance of ``points`` from ``box`` ((2, 3): lo, hi; 0 when every
+    point lies inside), along a periodic axis from the nearest image."""
+    s_max = 0.0
+    for i in range(points.shape[0]):
+        s = 0.0
+        for d in range(3):
+            g = _gap(points[i, d], box[0, d], box[1, d], period[3 + d])
+            s += g * g
+        s = math.sqrt(s)
+        if s > s_max:
+            s_max = s
+    return s_max
+
+
+@jit
+def uncovered_ghosts(points, boxes, period, reach, strays, me, sent):
+    """How many of this rank's owned centres ``points`` lie within ``reach[i] +
+    strays[r]`` of another rank r's box without being in r's ghost layer (``sent[r, i]``
+    False): the ghost layers held no longer cover what the next lists need (rank r's own
+    bodies lie at most ``strays[r]`` outside its box)."""
+    n = points.shape[0]
+    nr = boxes.shape[0]
+    missing = 0
+    for i in range(n):
+        for r in range(nr):
+            if r == me or sent[r, i]:
+                continue
+            s = 0.0
+            for d in range(3):
+                g = _gap(points[i, d], boxes[r, 0, d], boxes[r, 1, d], period[3 + d])
+                s += g * g
+            if math.sqrt(s) <= reach[i] + strays[r]:
+                missing += 1
+    return missing

@@ -29,8 +29,9 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   default, keeps it fixed.
 - **Ownership and ghosts**: a rank owns the bodies whose centre lies in its box and holds
   as ghosts every body of another rank with a listed contact partner among its own
-  elements (at a call's start), or within 2 r_max + skin (+ the body's own extent) of its
-  box (at a list rebuild): a clustered body is ghosted whole. Each rank computes every
+  elements (at a call's start), or within 2 r_max + skin + the body's own extent + the
+  scene's largest extent + ``ghost_margin`` of its box: a clustered body is ghosted
+  whole. Each rank computes every
   contact of its owned elements (owned-ghost pairs on both ranks, Newton's third law not
   used across ranks), so an owned body's force is complete without sending forces back;
   its lists hold no pair of two ghosts and no boundary entry of a ghost (their owners
@@ -49,7 +50,10 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   (:func:`dpm.kernels.step.ranked_run`, :mod:`dpm.kernels.mpi_calls`) where this MPI
   allows it (:mod:`dpm.parallel.native`; ``loop``), else from Python with mpi4py.
 - **At a list rebuild** (the same step on every rank, since ghosts move as their owners):
-  bodies whose centre left the box migrate to the rank whose box holds it, with their
+  unless the ghost layers held still cover what the new lists need and no body strayed
+  farther than ``ghost_margin`` out of its box (:meth:`MpiBackend._ghosts_cover`: then
+  the rows stay and the halo runs), bodies whose centre left the box migrate to the
+  rank whose box holds it, with their
   full state (orientation, angular velocity, the integrator's rows) and the history of
   every contact they touch; ghost layers are chosen again; each rank rebuilds its lists,
   carrying every contact's history by pair. One message per pair of ranks, one float64
@@ -85,6 +89,7 @@ from ..errors import ParameterError
 from ..kernels.domain import owner_and_near
 from ..kernels.halo import HALO_WIDTH
 from ..kernels.mpi_calls import HALO_TAG
+from ..state import Bodies
 from . import decomposition as dec
 from . import launched_ranks
 from .local import (
@@ -116,7 +121,8 @@ class MpiBackend(CpuBackend):
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
                  rebalance: float = 1.1, boxes: Any = None, weight: str = "cost",
-                 comm: Any = None, loop: str = "auto") -> None:
+                 comm: Any = None, loop: str = "auto",
+                 ghost_margin: float | None = None) -> None:
         super().__init__(threads=threads, force_pass=force_pass)
         if loop not in ("auto", "compiled", "python"):
             raise ParameterError(f"MpiBackend(): loop={loop!r}; allowed: auto (compiled "
@@ -159,6 +165,19 @@ class MpiBackend(CpuBackend):
             raise ParameterError(f"MpiBackend(): rebalance={rebalance!r}; allowed: a "
                                  "number >= 1 (largest over mean step time)")
         self.rebalance = float(rebalance)
+        if ghost_margin is not None and not (
+                isinstance(ghost_margin, int | float) and np.isfinite(ghost_margin)
+                and ghost_margin >= 0.0):
+            raise ParameterError(f"MpiBackend(): ghost_margin={ghost_margin!r}; allowed: "
+                                 "None (the scene's skin) or a length >= 0 [m]")
+        #: extra thickness [m] of the ghost layers chosen at a migration, beyond what the
+        #: next lists need (None: the scene's skin). A list rebuild at which the layers
+        #: held still cover what the new lists need, and no body lies farther than this
+        #: outside its rank's box, keeps every body where it is and runs the halo instead
+        #: of a migration (:meth:`_ghosts_cover`): a settled bed migrates rarely
+        self.ghost_margin = None if ghost_margin is None else float(ghost_margin)
+        #: the largest body extent in the scene (:meth:`_body_extent`), set at a scatter
+        self._ext_max = 0.0
         self._comm = comm
         self._reset_local()
         #: figures of the last call on this rank: steps, seconds stepping (all of it), in
@@ -172,7 +191,8 @@ class MpiBackend(CpuBackend):
         self.timing: dict[str, float] = {}
         #: the same figures summed over the calls (``reset_totals()`` starts again)
         self.totals: dict[str, float] = {}
-        #: list rebuilds where no body changed rank and no ghost layer changed (on every
+        #: list rebuilds at which the ghost layers held still covered what the new lists
+        #: need and no body had strayed past ``ghost_margin`` out of its box (on every
         #: rank): no migration ran, the halo did
         self.skipped_migrations = 0
         #: bodies that changed rank at the migrations so far, counted by their old owners
@@ -189,6 +209,7 @@ class MpiBackend(CpuBackend):
         self._step_time = 0.0
         self._old_boxes = self._times = None
         self._hp: dict = {}
+        self._sent: np.ndarray | None = None
         self._gather_scratch: Scratch | None = None
         #: the host state (``sim.bodies``, the contact lists) is older than the ranks':
         #: the calls since the last :meth:`sync_host` left it where it was
@@ -197,7 +218,7 @@ class MpiBackend(CpuBackend):
     def __getstate__(self) -> dict[str, Any]:
         state = super().__getstate__()
         for k in ("_comm", "local", "inner", "boxes", "_host_copy", "_old_boxes", "_times",
-                  "_gather_scratch"):
+                  "_gather_scratch", "_sent"):
             state[k] = None
         state["_hp"] = {}
         state["_stale"] = False
@@ -207,7 +228,7 @@ class MpiBackend(CpuBackend):
         # (checkpoints written before the compiled loop: its attributes at defaults)
         super().__setstate__({"loop": "auto", "loop_used": "", "_hp": {}, "_stale": False,
                               "migrants": 0, "touching_weight": self.TOUCHING_WEIGHT,
-                              "_fit_samples": []}
+                              "_fit_samples": [], "ghost_margin": None, "_ext_max": 0.0}
                              | state)
 
     # ------------------------------------------------------------------ communicator
@@ -456,13 +477,13 @@ class MpiBackend(CpuBackend):
                 t0 = clock()
                 had = (time.process_time() - cpu_since) / max(
                     (t0 - wall_since) * numba.get_num_threads(), 1e-300)
-                if self._recut_in_call(work, s - since, had):
-                    recuts += 1
+                cut = self._recut_in_call(work, s - since, had)
+                recuts += int(cut)
                 t_recut += clock() - t0
                 work, since = 0.0, s
                 cpu_since, wall_since = time.process_time(), clock()
                 t0 = clock()
-                self._migrate()
+                self._migrate(moved=cut)
                 t1 = clock()
                 inner.rebuild()  # (history of the carried entries merged by pair)
                 rebuilds += 1
@@ -574,12 +595,30 @@ class MpiBackend(CpuBackend):
 
     def _body_extent(self, estart: np.ndarray, offset: np.ndarray,
                      radius: np.ndarray) -> np.ndarray:
-        """Largest distance of a body's element surfaces from its centre, less r_max."""
+        """Largest distance of a body's element surfaces from its centre, less the
+        scene's r_max (0 for a sphere of radius r_max)."""
         if len(offset) == 0:
             return np.zeros(len(estart) - 1)
-        reach = np.linalg.norm(offset, axis=1) + radius - radius.max()
+        r_max = float(self.sim.elements.radius.max())
+        reach = np.linalg.norm(offset, axis=1) + radius - r_max
         return np.maximum.reduceat(reach, estart[:-1].clip(max=len(reach) - 1)) \
             if len(estart) > 1 else np.zeros(0)
+
+    def _reach(self, estart: np.ndarray, offset: np.ndarray, radius: np.ndarray
+               ) -> np.ndarray:
+        """How near another rank's box a body's centre must lie for that rank's next
+        lists to need it as a ghost: 2 r_max + skin (+ an interaction range beyond
+        touching) + its own extent + the largest extent in the scene (an element of the
+        other rank's body may reach out of that box by as much)."""
+        return self._layer() + self._body_extent(estart, offset, radius) + self._ext_max
+
+    def _margin(self) -> float:
+        """The ghost layers' extra thickness chosen at a migration (``ghost_margin``)."""
+        return float(self.sim.skin) if self.ghost_margin is None else self.ghost_margin
+
+    def _period(self) -> np.ndarray:
+        per = self.sim.period
+        return np.zeros(6) if per is None else np.asarray(per, np.float64)
 
     def _cut(self, pool_pos: np.ndarray, weight: np.ndarray) -> None:
         """A new cut unless the current one is kept (after a host change, while the ranks'
@@ -636,9 +675,11 @@ class MpiBackend(CpuBackend):
         weight, pairs = self._cost()
         eb_i, eb_j = e.owner[pairs.i], e.owner[pairs.j]
         self._cut(b.position, weight)
-        # ghosts of rank k: every body within the ghost layer of k's box, and every body
-        # with a listed partner owned by k
-        reach = self._layer() + self._body_extent(b.element_start, e.offset, e.radius)
+        # ghosts of rank k: every body within the ghost layer of k's box (with the
+        # margin), and every body with a listed partner owned by k
+        ext = self._body_extent(b.element_start, e.offset, e.radius)
+        self._ext_max = max(float(ext.max()), 0.0) if len(ext) else 0.0
+        reach = self._layer() + ext + self._ext_max + self._margin()
         owner, ghost_on = owner_and_near(b.position, self.boxes, sim.period, reach)
         cross = owner[eb_i] != owner[eb_j]
         ghost_on[owner[eb_i[cross]], eb_j[cross]] = True
@@ -709,6 +750,11 @@ class MpiBackend(CpuBackend):
         if firsts != sorted(firsts) or (firsts and firsts[0] != n_own):
             raise RuntimeError("MpiBackend: ghost groups are not in rank order")
         r_off = np.concatenate([[0], np.cumsum([ranges[k][1] for k in r_rank])])
+        # which owned rows each rank holds as ghosts (what :meth:`_ghosts_cover` checks)
+        sent = np.zeros((self.ranks, n_own), np.bool_)
+        for k, rows in sends.items():
+            sent[k, rows] = True
+        self._sent = sent
         self._hp = {"send_rows": s_rows.astype(np.int64), "send_rank": s_rank,
                     "send_off": s_off.astype(np.int64),
                     "sbuf": np.empty((len(s_rows), HALO_WIDTH)),
@@ -836,26 +882,31 @@ class MpiBackend(CpuBackend):
         return True
 
     # ------------------------------------------------------------------ migration
-    def _migrate(self) -> None:
+    def _migrate(self, moved: bool = False) -> None:
         """At a list rebuild: owned bodies whose centre left the box go to their new
         owner with the history of the contacts they touch; the ghost layers are chosen
-        again (the old owner sends a migrant's ghost copies on its new owner's behalf)."""
+        again (the old owner sends a migrant's ghost copies on its new owner's behalf).
+        Unless the boxes ``moved`` (a re-cut), a rebuild at which the ghost layers held
+        still cover what the new lists need keeps every row where it is
+        (:meth:`_ghosts_cover`)."""
         loc, inner = self.local, self.inner
         me, P = self.rank, self.ranks
         b, e = loc.bodies, loc.elements
         n_own = loc.n_owned
         pos = b.position[:n_own]
         est = b.element_start
-        reach = self._layer() + self._body_extent(est[:n_own + 1], e.offset[:est[n_own]],
-                                                  e.radius[:est[n_own]])
-        new_owner, near = owner_and_near(pos, self.boxes, self.sim.period, reach)
-        self.migrants += int(np.count_nonzero(new_owner != me))
-        if self._nothing_moves(new_owner, near):
-            # (no body changes rank and every ghost layer holds the same bodies, on every
-            # rank: the ghosts take their owners' state as at any step, the rows stay)
+        reach = self._reach(est[:n_own + 1], e.offset[:est[n_own]], e.radius[:est[n_own]])
+        if not moved and self._ghosts_cover(pos, reach):
+            # (every body stays with its owner and every ghost layer held still covers
+            # what the new lists need, on every rank: the ghosts take their owners'
+            # state as at any step, the rows stay)
+            self._fresh_rows()
             self._halo()
             self.skipped_migrations += 1
             return
+        new_owner, near = owner_and_near(pos, self.boxes, self.sim.period,
+                                         reach + self._margin())
+        self.migrants += int(np.count_nonzero(new_owner != me))
         # touching entries only: the lists are rebuilt right after, and an entry that does
         # not touch has no history to carry (it was cleared when the pair parted)
         pool = Pool.of(b, e, inner.aux, inner.vf, inner.wf, loc.contacts, loc.wall_contacts,
@@ -965,19 +1016,53 @@ class MpiBackend(CpuBackend):
         # rows no rank needs here any more drop out (old ghosts not chosen again)
         self._place(pool, owner, ghost_on, pids)
 
-    def _nothing_moves(self, new_owner: np.ndarray, near: np.ndarray) -> bool:
-        """Whether, on every rank (collective), every owned body stays and the ranks that
-        need each one as a ghost are those that hold it now (the halo plan's)."""
+    def _fresh_rows(self) -> None:
+        """The rank's body and element arrays (and the integrator's rows) as fresh
+        copies, as a migration leaves them."""
+        loc, inner = self.local, self.inner
+        b, e = loc.bodies, loc.elements
+        for k in Bodies.ARRAYS + ("element_start",):
+            setattr(b, k, np.array(getattr(b, k)))
+        for k in ("owner", "offset", "radius", "material", "position", "reference"):
+            setattr(e, k, np.array(getattr(e, k)))
+        if loc.plan.spheres_only:
+            from ..population import share_sphere_arrays
+
+            share_sphere_arrays(loc)
+        inner.aux = np.array(inner.aux)
+        inner.vf = np.array(inner.vf)
+        inner.wf = np.array(inner.wf)
+        inner.e_worst = np.array(inner.e_worst)
+        inner.e_count = np.array(inner.e_count)
+
+    def _ghosts_cover(self, pos: np.ndarray, reach: np.ndarray) -> bool:
+        """Whether a list rebuild can keep every body where it is (collective): on every
+        rank, no owned body lies farther than the margin (``ghost_margin``) outside the
+        rank's box, and every owned body within ``reach`` of another rank's box, widened
+        by how far that rank's own bodies lie outside it, is in that rank's ghost layer
+        already. Then the new lists find every pair they need among the rows held: a pair
+        of bodies a (here) and b (owned by rank r, at most ``strays[r]`` outside r's box)
+        within 2 r_max + skin + both extents has a within ``reach[a] + strays[r]`` of r's
+        box. The layers were chosen with the margin, so a bed that barely moves keeps
+        them for many rebuilds."""
         from mpi4py import MPI
 
-        hp = self._hp
-        sends = {int(k): hp["send_rows"][hp["send_off"][m]:hp["send_off"][m + 1]]
-                 for m, k in enumerate(hp["send_rank"])}
-        empty = np.zeros(0, np.int64)
-        same = bool(np.all(new_owner == self.rank)) and all(
-            np.array_equal(np.flatnonzero(near[k]), sends.get(k, empty))
-            for k in range(self.ranks) if k != self.rank)
-        return bool(self.comm.allreduce(int(same), op=MPI.MIN))
+        from ..kernels.domain import stray_distance, uncovered_ghosts
+
+        sent = getattr(self, "_sent", None)
+        me, P = self.rank, self.ranks
+        per = self._period()
+        boxes = np.ascontiguousarray(self.boxes, np.float64)
+        mine = np.array([stray_distance(pos, boxes[me], per) if len(pos) else 0.0])
+        strays = np.empty(P)
+        self.comm.Allgather([mine, MPI.DOUBLE], [strays, MPI.DOUBLE])
+        ok = (sent is not None and sent.shape == (P, len(pos))
+              and bool(np.all(strays <= self._margin())))
+        if ok and len(pos):
+            ok = uncovered_ghosts(np.ascontiguousarray(pos), boxes, per,
+                                  np.ascontiguousarray(reach, np.float64), strays, me,
+                                  sent) == 0
+        return bool(self.comm.allreduce(int(ok), op=MPI.MIN))
 
     @staticmethod
     def _take_state(pool: Pool, rows: np.ndarray, msg: dict, src: np.ndarray) -> None:
