@@ -27,6 +27,9 @@ Scenes:
 - ``crash``: two spheres meeting head-on across x = 0 too fast for the overlap limit,
   beside spheres resting on the floor: the run stops on every rank at the serial step
   with the serial diagnosis (the driver records the step and the message).
+- ``rod``: a 12 mm rod (a cylinder cluster) whose centre lies just right of x = 0, and a
+  sphere flying into its tip 5.5 mm left of x = 0 (the ghost layer must count the rod's
+  length: the sphere is far from the rod's rank's box).
 - ``escape``: a sphere thrown across x = 0 and out of the scene's box beside spheres
   resting on a floor: the escape guard removes it on every rank.
 """

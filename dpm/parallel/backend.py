@@ -89,7 +89,6 @@ from ..errors import ParameterError
 from ..kernels.domain import owner_and_near
 from ..kernels.halo import HALO_WIDTH
 from ..kernels.mpi_calls import HALO_TAG
-from ..state import Bodies
 from . import decomposition as dec
 from . import launched_ranks
 from .local import (
@@ -900,7 +899,6 @@ class MpiBackend(CpuBackend):
             # (every body stays with its owner and every ghost layer held still covers
             # what the new lists need, on every rank: the ghosts take their owners'
             # state as at any step, the rows stay)
-            self._fresh_rows()
             self._halo()
             self.skipped_migrations += 1
             return
@@ -1015,25 +1013,6 @@ class MpiBackend(CpuBackend):
             pool.walls = Entries.cat(new_w + [pool.walls], width)
         # rows no rank needs here any more drop out (old ghosts not chosen again)
         self._place(pool, owner, ghost_on, pids)
-
-    def _fresh_rows(self) -> None:
-        """The rank's body and element arrays (and the integrator's rows) as fresh
-        copies, as a migration leaves them."""
-        loc, inner = self.local, self.inner
-        b, e = loc.bodies, loc.elements
-        for k in Bodies.ARRAYS + ("element_start",):
-            setattr(b, k, np.array(getattr(b, k)))
-        for k in ("owner", "offset", "radius", "material", "position", "reference"):
-            setattr(e, k, np.array(getattr(e, k)))
-        if loc.plan.spheres_only:
-            from ..population import share_sphere_arrays
-
-            share_sphere_arrays(loc)
-        inner.aux = np.array(inner.aux)
-        inner.vf = np.array(inner.vf)
-        inner.wf = np.array(inner.wf)
-        inner.e_worst = np.array(inner.e_worst)
-        inner.e_count = np.array(inner.e_count)
 
     def _ghosts_cover(self, pos: np.ndarray, reach: np.ndarray) -> bool:
         """Whether a list rebuild can keep every body where it is (collective): on every
