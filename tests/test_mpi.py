@@ -339,6 +339,9 @@ def test_bad_requests_are_named():
         MpiBackend(weight="speed")
     with pytest.raises(dpm.ParameterError, match="loop='fast'.*allowed: auto"):
         MpiBackend(loop="fast")
+    with pytest.raises(dpm.ParameterError, match="ghost_margin=-0.001.*allowed"):
+        MpiBackend(ghost_margin=-1e-3)
+    assert MpiBackend(ghost_margin=0).ghost_margin == 0.0
 
 
 def test_one_rank_is_the_cpu_backend():
