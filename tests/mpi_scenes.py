@@ -322,6 +322,8 @@ def main(argv: list[str] | None = None) -> int:
                     "value: every sim.run one call)")
     ap.add_argument("--tilt-gravity", action="store_true",
                     help="tilt gravity half-way (a script changing the scene between runs)")
+    ap.add_argument("--ghost-margin", type=float, default=None,
+                    help="the MPI backend's ghost_margin [m] (default: the skin)")
     ap.add_argument("--reductions", action="store_true",
                     help="at the end, the between-calls reductions of the ranks' rows "
                     "against the gathered host's")
@@ -337,6 +339,8 @@ def main(argv: list[str] | None = None) -> int:
             sim, steps = SCENES[args.scene](args.device)
         if args.output:
             sim.output(args.output, every_steps=max(1, steps // 4), overwrite=True)
+    if args.ghost_margin is not None and args.device == "mpi":
+        sim.backend.ghost_margin = args.ghost_margin
     if args.call_aim is not None:
         sim.backend.CALL_AIM = sim.backend.CALL_AIM_MAX = args.call_aim
     per_call = []

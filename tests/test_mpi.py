@@ -136,6 +136,8 @@ def test_same_trajectories_as_one_process(scene, ranks, tmp_path):
         # the list rebuilds after the migrations timed apart, a part of their seconds
         mig, relist = got["per_call"][-1, :, 8], got["per_call"][-1, :, 9]
         assert np.all(relist > 0) and np.all(relist < mig), (relist, mig)
+    if scene == "settle" and ranks == 2:  # (the ghost layers' margin: rows kept)
+        assert got["per_call"][-1, 0, 5] > 0, got["per_call"][:, 0, 5]
     if scene in ("corner", "slide") and ranks == 2:
         # rebuilds where no body changed rank and no ghost layer changed ran the halo
         # instead of a migration (and still gave the serial trajectories above)
@@ -185,6 +187,17 @@ def test_between_calls_reductions_of_the_ranks_rows_match_the_host(tmp_path):
     np.testing.assert_array_equal(got["ranks_fastest"], got["host_fastest"])
     # nothing non-finite nor outside a box round all; one body outside the cut box
     np.testing.assert_array_equal(got["ranks_hits"], [False, True, False])
+
+
+@needs_mpi
+@pytest.mark.parametrize("scene,ranks,margin", [("slide", 2, 2e-3), ("corner", 3, 0.0)])
+def test_any_ghost_margin_keeps_the_serial_trajectories(scene, ranks, margin, tmp_path):
+    """Rebuilds that keep every row (a wide margin: most of them; none: few) give the
+    serial trajectories, and a body that strays past the margin still migrates."""
+    got = parallel(scene, ranks, tmp_path, "--ghost-margin", str(margin))
+    assert_same(serial(scene), got)
+    if scene == "slide":  # (the three bodies crossed x = 0 and moved on past 2 mm)
+        assert got["per_call"][-1, 0, 0] == 0 and got["per_call"][-1, 0, 5] > 0
 
 
 @needs_mpi

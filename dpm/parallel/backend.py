@@ -43,7 +43,8 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   holding them (LAMMPS' forward communication; one message per neighbour, ``Isend`` /
   ``Irecv``; rows packed and unpacked by numba kernels, :mod:`dpm.kernels.halo`); one
   wait for both; the ghosts place their elements; forces and the post-force part run
-  for owned bodies. At a rebuild step the migration carries the ghosts' state instead.
+  for owned bodies. At a rebuild step the migration carries the ghosts' state instead
+  (or, where the rows stay, the halo).
   An overlap past ``max_overlap`` stops every rank at the serial step, with step
   s + 1's pre-force part done too (its vote travels with that step's). The steps between
   rebuilds run as one compiled call with the MPI calls in it
@@ -77,6 +78,7 @@ messages inside the iteration; not yet).
 
 from __future__ import annotations
 
+import numbers
 import time
 from typing import Any
 
@@ -164,9 +166,9 @@ class MpiBackend(CpuBackend):
             raise ParameterError(f"MpiBackend(): rebalance={rebalance!r}; allowed: a "
                                  "number >= 1 (largest over mean step time)")
         self.rebalance = float(rebalance)
-        if ghost_margin is not None and not (
-                isinstance(ghost_margin, int | float) and np.isfinite(ghost_margin)
-                and ghost_margin >= 0.0):
+        if ghost_margin is not None and (
+                isinstance(ghost_margin, bool) or not isinstance(ghost_margin, numbers.Real)
+                or not np.isfinite(ghost_margin) or ghost_margin < 0.0):
             raise ParameterError(f"MpiBackend(): ghost_margin={ghost_margin!r}; allowed: "
                                  "None (the scene's skin) or a length >= 0 [m]")
         #: extra thickness [m] of the ghost layers chosen at a migration, beyond what the
@@ -1022,8 +1024,9 @@ class MpiBackend(CpuBackend):
         already. Then the new lists find every pair they need among the rows held: a pair
         of bodies a (here) and b (owned by rank r, at most ``strays[r]`` outside r's box)
         within 2 r_max + skin + both extents has a within ``reach[a] + strays[r]`` of r's
-        box. The layers were chosen with the margin, so a bed that barely moves keeps
-        them for many rebuilds."""
+        box (2 r_max + skin + an interaction range beyond touching, as JKR's, + both
+        extents: :meth:`_reach`). The layers were chosen with the margin, so a bed that
+        barely moves keeps them for many rebuilds."""
         from mpi4py import MPI
 
         from ..kernels.domain import stray_distance, uncovered_ghosts
@@ -1032,7 +1035,11 @@ class MpiBackend(CpuBackend):
         me, P = self.rank, self.ranks
         per = self._period()
         boxes = np.ascontiguousarray(self.boxes, np.float64)
-        mine = np.array([stray_distance(pos, boxes[me], per) if len(pos) else 0.0])
+        # (without periodic images: a box open to infinity along a periodic axis holds an
+        # image of every centre, and ownership is by the plain position, so a body that
+        # wrapped to the far end must count as strayed and migrate; the plain distance is
+        # never below the nearest image's, so the covering argument holds with it)
+        mine = np.array([stray_distance(pos, boxes[me], np.zeros(6)) if len(pos) else 0.0])
         strays = np.empty(P)
         self.comm.Allgather([mine, MPI.DOUBLE], [strays, MPI.DOUBLE])
         ok = (sent is not None and sent.shape == (P, len(pos))
