@@ -74,13 +74,15 @@ def dpm_register_rolling_models(register: Register) -> None:
 
 
 @hookspec
-def dpm_before_step(sim: Simulation) -> None:
-    """Called before every step (makes the run return to Python each step)."""
+def dpm_before_step(sim: Simulation, rank: int) -> None:
+    """Called before every step (makes the run return to Python each step); on every MPI
+    rank, ``rank`` its number (0 on one process)."""
 
 
 @hookspec
-def dpm_after_step(sim: Simulation) -> None:
-    """Called after every step (makes the run return to Python each step)."""
+def dpm_after_step(sim: Simulation, rank: int) -> None:
+    """Called after every step (makes the run return to Python each step); on every MPI
+    rank, ``rank`` its number (0 on one process)."""
 
 
 @hookspec
@@ -93,23 +95,24 @@ def dpm_output_layout(sim: Simulation, file: Any) -> None:
 
 
 @hookspec
-def dpm_on_output(sim: Simulation, frame: int, path: Any) -> None:
+def dpm_on_output(sim: Simulation, frame: int, path: Any, rank: int) -> None:
     """Called after each output frame is written and flushed."""
 
 
 @hookspec
-def dpm_on_particles_inserted(sim: Simulation, inlet: Any, ids: Any) -> None:
+def dpm_on_particles_inserted(sim: Simulation, inlet: Any, ids: Any, rank: int) -> None:
     """An inlet has just inserted the bodies ``ids`` (numpy int64 array)."""
 
 
 @hookspec
-def dpm_on_particles_removed(sim: Simulation, outlet: Any, records: Any) -> None:
+def dpm_on_particles_removed(sim: Simulation, outlet: Any, records: Any,
+                             rank: int) -> None:
     """An outlet has just removed bodies; ``records`` is a dict of arrays: id, time, mass,
     residence_time, position (n, 3), velocity (n, 3)."""
 
 
 @hookspec
-def dpm_on_checkpoint(sim: Simulation, state: dict) -> None:
+def dpm_on_checkpoint(sim: Simulation, state: dict, rank: int) -> None:
     """A checkpoint is being written: put what the plugin must have back after a restart
     into ``state`` under a key of its own (picklable values: numpy arrays, numbers,
     strings, lists, dicts). State kept on the scene's own objects (a boundary, a motion,
@@ -117,6 +120,6 @@ def dpm_on_checkpoint(sim: Simulation, state: dict) -> None:
 
 
 @hookspec
-def dpm_on_restart(sim: Simulation, state: dict) -> None:
+def dpm_on_restart(sim: Simulation, state: dict, rank: int) -> None:
     """A simulation was restored from a checkpoint (:func:`dpm.restart`); ``state`` is the
     dict that :func:`dpm_on_checkpoint` filled when it was written."""

@@ -192,12 +192,26 @@ def version() -> str:
         return __version__
 
 
+def _rank_of(sim: object) -> int:
+    """The MPI rank of the process running ``sim`` (0 on one process)."""
+    rank = getattr(sim, "rank", None)
+    if rank is None:
+        from .parallel import rank as launched_rank
+
+        return launched_rank()
+    return int(rank)
+
+
 def call_hook(reg: Registry, name: str, **kwargs: object) -> None:
     """Call every implementation of the run-time hook ``name`` (in pluggy's order, the
-    last registered first); one that raises stops the caller with a :class:`PluginError`
-    naming the plugin and the hook (the original exception chained)."""
+    last registered first), each with the arguments it names (``rank``, this process's
+    MPI rank, given to those that ask for it); one that raises stops the caller with a
+    :class:`PluginError` naming the plugin and the hook (the original exception
+    chained)."""
     hook = getattr(reg.manager.hook, name)
     for impl in reversed(hook.get_hookimpls()):
+        if "rank" in impl.argnames and "rank" not in kwargs:
+            kwargs["rank"] = _rank_of(kwargs.get("sim"))
         try:
             impl.function(**{a: kwargs[a] for a in impl.argnames})
         except PluginError:

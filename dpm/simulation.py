@@ -341,6 +341,17 @@ class Simulation:
         self._overlap_tolerance = float(value)
 
     @property
+    def rank(self) -> int:
+        """This process's MPI rank (0 on one process): a script or hook that runs on
+        every rank tells them apart by it."""
+        return int(getattr(self.backend, "rank", 0))
+
+    @property
+    def ranks(self) -> int:
+        """The number of MPI ranks running this scene (1 on one process)."""
+        return int(getattr(self.backend, "ranks", 1))
+
+    @property
     def threads(self) -> int | None:
         """Threads of the step kernels (None: the backend's default)."""
         return getattr(self.backend, "threads", None)

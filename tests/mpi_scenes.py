@@ -41,12 +41,16 @@ import sys
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 
 import dpm
 from dpm.parallel import launched_ranks
 
 G = 9.81
+#: the integrator of every scene but ``sticky`` (``--integrator``; the test sets it for
+#: its one-process reference too)
+OPTIONS = {"integrator": "velocity_verlet"}
 
 
 def _materials():
@@ -56,7 +60,8 @@ def _materials():
 
 
 def _sim(device, dt=1e-5, gravity=(0.0, 0.0, -G)) -> tuple[dpm.Simulation, object, object]:
-    sim = dpm.Simulation(dt=dt, gravity=gravity, device=device)
+    sim = dpm.Simulation(dt=dt, gravity=gravity, device=device,
+                         integrator=OPTIONS["integrator"])
     glass, steel = _materials()
     sim.contact(glass, glass, model="hertz_mindlin", restitution=0.5, friction=0.5)
     sim.contact(glass, steel, model="hertz_mindlin", restitution=0.4, friction=0.4)
@@ -173,7 +178,7 @@ def gather(kind: str, rebalance: float = 1.1):
     g = 9.81 * np.array([-1.0, -1.0, -0.3])
     sim = dpm.Simulation(dt=1e-5, gravity=tuple(g), device=device(kind, False,
                                                                      rebalance=rebalance)
-                         if kind != "cpu" else "cpu")
+                         if kind != "cpu" else "cpu", integrator=OPTIONS["integrator"])
     glass, steel = _materials()
     sim.contact(glass, glass, model="hertz_mindlin", restitution=0.3, friction=0.3)
     sim.contact(glass, steel, model="hertz_mindlin", restitution=0.3, friction=0.3)
@@ -306,6 +311,42 @@ def state(sim: dpm.Simulation) -> dict[str, np.ndarray]:
     return out
 
 
+class HookProbe:
+    """Run-time hooks that record what they were given (``--probe-hooks``)."""
+
+    def __init__(self) -> None:
+        self.ranks_given: set[int] = set()
+        self.after = 0
+        self.before = 0
+        self.threads: set[int] = set()
+
+    @dpm.hookimpl
+    def dpm_after_step(self, sim, rank):
+        self.ranks_given.add(int(rank))
+        self.after += 1
+        self.threads.add(numba.get_num_threads())
+
+    @dpm.hookimpl
+    def dpm_before_step(self, sim):  # (a hook that asks for no rank is still called)
+        self.before += 1
+
+    def summary(self) -> list[int]:
+        """[rank given (-1: several), this process's rank, sim.rank, after calls, before
+        calls, fewest and most threads]"""
+        given = self.ranks_given.pop() if len(self.ranks_given) == 1 else -1
+        return [given, dpm.parallel.rank(), self._sim_rank, self.after, self.before,
+                min(self.threads, default=0), max(self.threads, default=0)]
+
+
+def gather_rows(row: list) -> list[list]:
+    """Every rank's ``row``, in rank order (on one process: one row)."""
+    if launched_ranks() > 1:
+        from mpi4py import MPI
+
+        return MPI.COMM_WORLD.allgather(row)
+    return [row]
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("scene", choices=list(SCENES))
@@ -324,10 +365,19 @@ def main(argv: list[str] | None = None) -> int:
                     help="tilt gravity half-way (a script changing the scene between runs)")
     ap.add_argument("--ghost-margin", type=float, default=None,
                     help="the MPI backend's ghost_margin [m] (default: the skin)")
+    ap.add_argument("--integrator", default="velocity_verlet",
+                    help="the integrator of the scene (not sticky's)")
+    ap.add_argument("--threads", type=int, default=None,
+                    help="threads of each rank's step kernels (NUMBA_NUM_THREADS at least)")
+    ap.add_argument("--probe-hooks", action="store_true",
+                    help="record, on every rank, the rank each dpm_after_step hook was "
+                    "given, the calls of it and of dpm_before_step (which asks no rank), "
+                    "and the threads the steps ran on")
     ap.add_argument("--reductions", action="store_true",
                     help="at the end, the between-calls reductions of the ranks' rows "
                     "against the gathered host's")
     args = ap.parse_args(argv)
+    OPTIONS["integrator"] = args.integrator
     if args.restart:
         sim = dpm.restart(args.restart)
         steps = int(SCENES[args.scene](args.device)[1]) - sim.step_count \
@@ -341,6 +391,11 @@ def main(argv: list[str] | None = None) -> int:
             sim.output(args.output, every_steps=max(1, steps // 4), overwrite=True)
     if args.ghost_margin is not None and args.device == "mpi":
         sim.backend.ghost_margin = args.ghost_margin
+    if args.threads is not None:
+        sim.threads = args.threads
+    probe = HookProbe() if args.probe_hooks else None
+    if probe:
+        sim._registry.manager.register(probe, name="rank-probe")
     if args.call_aim is not None:
         sim.backend.CALL_AIM = sim.backend.CALL_AIM_MAX = args.call_aim
     per_call = []
@@ -380,6 +435,9 @@ def main(argv: list[str] | None = None) -> int:
     res = state(sim)
     if args.reductions:
         res.update(reductions(sim))
+    if probe:
+        probe._sim_rank = sim.rank
+        res["hooks"] = np.array(gather_rows(probe.summary()))
     res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 10))
     res["wall_s"] = np.array(wall)
     res["loop_used"] = np.array(getattr(sim.backend, "loop_used", ""))

@@ -91,15 +91,20 @@ def parallel(scene: str, n: int, tmp: Path, *extra: str,
     return dict(np.load(out))
 
 
-def serial(scene: str) -> dict:
+def serial(scene: str, integrator: str = "velocity_verlet") -> dict:
     """The end state of ``scene`` on one process (once per session)."""
-    if scene not in _SERIAL:
-        sim, steps = mpi_scenes.SCENES[scene]("cpu")
+    key = f"{scene}/{integrator}"
+    if key not in _SERIAL:
+        mpi_scenes.OPTIONS["integrator"] = integrator
+        try:
+            sim, steps = mpi_scenes.SCENES[scene]("cpu")
+        finally:
+            mpi_scenes.OPTIONS["integrator"] = "velocity_verlet"
         chunk = max(1, steps // 8)  # (the driver's calls)
         while sim.step_count < steps:
             sim.run(steps=min(chunk, steps - sim.step_count), progress=False)
-        _SERIAL[scene] = mpi_scenes.state(sim)
-    return _SERIAL[scene]
+        _SERIAL[key] = mpi_scenes.state(sim)
+    return _SERIAL[key]
 
 
 def assert_same(ref: dict, got: dict, tol: float = 1e-10) -> None:
@@ -118,8 +123,8 @@ def assert_same(ref: dict, got: dict, tol: float = 1e-10) -> None:
 @needs_mpi
 @pytest.mark.parametrize("scene,ranks", [("settle", 2), ("settle", 3), ("corner", 2),
                                          ("corner", 3), ("corner", 4), ("slide", 2),
-                                         ("slide", 3), ("flow", 2), ("sticky", 2),
-                                         ("rod", 2)])
+                                         ("slide", 3), ("flow", 2), ("flow", 3),
+                                         ("sticky", 2), ("rod", 2)])
 def test_same_trajectories_as_one_process(scene, ranks, tmp_path):
     got = parallel(scene, ranks, tmp_path)
     assert_same(serial(scene), got)
@@ -142,6 +147,41 @@ def test_same_trajectories_as_one_process(scene, ranks, tmp_path):
         # rebuilds where no body changed rank and no ghost layer changed ran the halo
         # instead of a migration (and still gave the serial trajectories above)
         assert got["per_call"][-1, 0, 5] > 0, got["per_call"][:, 0, 5]
+
+
+@needs_mpi
+@pytest.mark.parametrize("scene,ranks", [("slide", 2), ("settle", 3)])
+def test_integrator_state_migrates_with_the_bodies(scene, ranks, tmp_path):
+    """Gear's predictor-corrector keeps its higher derivatives per body (the integrator's
+    auxiliary rows): they travel with the bodies that cross the cut, and the run ends as
+    on one process."""
+    got = parallel(scene, ranks, tmp_path, "--integrator", "gear4")
+    assert_same(serial(scene, "gear4"), got)
+    if scene == "slide":  # (the bodies crossed x = 0: the rows migrated)
+        assert got["per_call"][-1, 0, 7] >= 3, got["per_call"][:, :, 7]
+
+
+@needs_mpi
+def test_threads_inside_ranks(tmp_path):
+    """Two ranks of two threads each (MPI x threads): the serial trajectories, and the
+    steps ran on two threads on both ranks."""
+    got = parallel("settle", 2, tmp_path, "--threads", "2", "--probe-hooks",
+                   env={"NUMBA_NUM_THREADS": "2"})
+    assert_same(serial("settle"), got)
+    hooks = got["hooks"]
+    assert np.all(hooks[:, 5:7] == 2), hooks
+
+
+@needs_mpi
+def test_hooks_run_on_every_rank_with_its_rank(tmp_path):
+    """A run-time hook runs on every rank at every step and is given the rank (which
+    ``sim.rank`` says too); a hook that asks for no rank is called as before. Per-step
+    hooks make every call one step: the trajectories are still the serial ones."""
+    got = parallel("slide", 3, tmp_path, "--probe-hooks")
+    assert_same(serial("slide"), got)
+    hooks = got["hooks"]
+    for r in range(3):  # rank given, its rank, sim.rank, after / before calls, threads
+        assert list(hooks[r]) == [r, r, r, 1500, 1500, 1, 1], hooks
 
 
 @needs_mpi
@@ -322,10 +362,11 @@ def test_long_calls_keep_the_balance(tmp_path):
 
 
 @needs_mpi
-def test_backend_contract_on_two_ranks():
-    out = mpirun(2, "--backend", '{"device": "mpi"}', script=HERE / "backend_contract.py",
-                 timeout=1500)
-    assert out.count(": ok") >= 2 * 3, out  # (each rank prints each scene)
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_backend_contract_on_ranks(ranks):
+    out = mpirun(ranks, "--backend", '{"device": "mpi"}',
+                 script=HERE / "backend_contract.py", timeout=1500)
+    assert out.count(": ok") >= ranks * 3, out  # (each rank prints each scene)
 
 
 def test_serial_run_never_imports_mpi4py():
