@@ -502,8 +502,10 @@ def test_dpm_run_scene_file_under_mpiexec(tmp_path):
     par, ser = tmp_path / "par", tmp_path / "ser"
     par.mkdir()
     ser.mkdir()
-    cmd = [MPIEXEC, "--allow-run-as-root", "--oversubscribe", "-n", "2", sys.executable,
-           "-m", "dpm.cli", *args]
+    # (the installed ``dpm`` command where there is one, as a user types it)
+    command = Path(sys.executable).parent / "dpm"
+    launcher = [str(command)] if command.exists() else [sys.executable, "-m", "dpm.cli"]
+    cmd = [MPIEXEC, "--allow-run-as-root", "--oversubscribe", "-n", "2", *launcher, *args]
     p = subprocess.run(cmd, cwd=par, capture_output=True, text=True, env=_env(), timeout=900,
                        stdin=subprocess.DEVNULL)
     assert p.returncode == 0, p.stderr[-3000:]
