@@ -226,6 +226,31 @@ def test_long_run_statistics_as_one_process(ranks, tmp_path):
 
 
 @needs_mpi
+def test_output_file_of_ranks_holds_the_serial_removal_records(tmp_path):
+    """The periodic flow scene with an outlet, written to HDF5 on 2 ranks (one file, by
+    rank 0) and on one process: the same frames and the same removed-particle table."""
+    import h5py
+
+    one, two = tmp_path / "one.h5", tmp_path / "two.h5"
+    assert mpi_scenes.main(["flow", str(tmp_path / "one.npz"), "--device", "cpu",
+                            "--output", str(one)]) == 0
+    parallel("flow", 2, tmp_path, "--output", str(two))
+    assert not any(p.name.startswith("two") and p.suffix == ".h5" and p != two
+                   for p in tmp_path.iterdir())  # (one file)
+    with h5py.File(one, "r") as a, h5py.File(two, "r") as b:
+        assert len(a["removed"]["id"]) > 0
+        assert set(a["removed"]) == set(b["removed"])
+        for k in a["removed"]:
+            ra, rb = a["removed"][k][()], b["removed"][k][()]
+            assert ra.shape == rb.shape, k
+            order_a = np.argsort(a["removed"]["id"][()], kind="stable")
+            order_b = np.argsort(b["removed"]["id"][()], kind="stable")
+            np.testing.assert_allclose(rb[order_b], ra[order_a], rtol=1e-10, atol=1e-12,
+                                       err_msg=k)
+        assert len(a["frames"]["step"]) == len(b["frames"]["step"])
+
+
+@needs_mpi
 def test_calls_end_without_gathering_the_whole_state(tmp_path):
     """A kernel call ends without gathering the ranks' state into the host: a run
     without output, flow events or hooks gathers once, at its end (two runs of several
