@@ -13,7 +13,6 @@ entries and the elements). Prints microseconds per step.
 
 from __future__ import annotations
 
-import math
 import os
 import sys
 import time
@@ -25,33 +24,8 @@ os.environ.setdefault("DPM_KERNELS", "scene")
 import boundaries as B  # noqa: E402
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
+from step_forms import scene  # noqa: E402
 
-import dpm  # noqa: E402
-
-
-def build(m, with_sentinels=True, side=B.FIXED_FLOOR, n_spheres=2000):
-    cell = side / m
-    verts, faces = B.grid_floor(m, cell)
-    a = dpm.Material("glass", density=2500.0, young=5e6, poisson=0.45)
-    w = dpm.Material("steel", density=7800.0, young=2e7, poisson=0.3)
-    sim = dpm.Simulation(dt=2e-6, gravity=(0, 0, 0), dt_check="off", threads=1,
-                         skin=B.SKIN, sphere_orientation=False)
-    sim.contact(a, a, model="hertz_mindlin", restitution=0.3, friction=0.5)
-    sim.contact(a, w, model="hertz_mindlin", restitution=0.3, friction=0.5)
-    sim.add_boundary("mesh", material=w, vertices=verts, faces=faces)
-    if with_sentinels:
-        B.sentinels(sim, w)
-    half = 0.5 * m * cell
-    rng = np.random.default_rng(1)
-    R = B.R
-    k = max(1, min(int(math.ceil(math.sqrt(n_spheres))), int(2 * half / (2.2 * R))))
-    g = (np.arange(k) - 0.5 * (k - 1)) * 2.2 * R
-    xy = np.array([(x, y) for x in g for y in g])[:n_spheres]
-    xy = xy + rng.uniform(-0.02 * R, 0.02 * R, xy.shape)
-    pos = np.c_[xy, np.full(len(xy), R * 0.9999)]
-    sim.add_particles("sphere", material=a, radius=R, positions=pos)
-    sim.run(steps=0, progress=False)
-    return sim
 
 def timed(sim, threads, nsteps):
     sim.threads = threads
@@ -89,7 +63,7 @@ def loops(mod):
 def main() -> None:
     m = int(sys.argv[1]) if len(sys.argv) > 1 else 10
     reps = int(sys.argv[2]) if len(sys.argv) > 2 else 2000
-    sim = build(m, True)
+    sim = scene(m, B.FIXED_FLOOR, 2000)  # (step_forms.py's floor: the same scene)
 
     def best(fn, *args, k=5):
         b = 1e9

@@ -365,11 +365,11 @@ class HookProbe:
     def dpm_before_step(self, sim):  # (a hook that asks for no rank is still called)
         self.before += 1
 
-    def summary(self) -> list[int]:
+    def summary(self, sim: dpm.Simulation) -> list[int]:
         """[rank given (-1: several), this process's rank, sim.rank, after calls, before
         calls, fewest and most threads]"""
         given = self.ranks_given.pop() if len(self.ranks_given) == 1 else -1
-        return [given, dpm.parallel.rank(), self._sim_rank, self.after, self.before,
+        return [given, dpm.parallel.rank(), sim.rank, self.after, self.before,
                 min(self.threads, default=0), max(self.threads, default=0)]
 
 
@@ -473,8 +473,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.reductions:
         res.update(reductions(sim))
     if probe:
-        probe._sim_rank = sim.rank
-        res["hooks"] = np.array(gather_rows(probe.summary()))
+        res["hooks"] = np.array(gather_rows(probe.summary(sim)))
     res["mean_z"] = np.array(heights)
     res["per_call"] = np.array(per_call) if per_call else np.zeros((0, 1, 10))
     res["wall_s"] = np.array(wall)

@@ -240,11 +240,11 @@ def test_output_file_of_ranks_holds_the_serial_removal_records(tmp_path):
     with h5py.File(one, "r") as a, h5py.File(two, "r") as b:
         assert len(a["removed"]["id"]) > 0
         assert set(a["removed"]) == set(b["removed"])
+        order_a = np.argsort(a["removed"]["id"][()], kind="stable")
+        order_b = np.argsort(b["removed"]["id"][()], kind="stable")
         for k in a["removed"]:
             ra, rb = a["removed"][k][()], b["removed"][k][()]
             assert ra.shape == rb.shape, k
-            order_a = np.argsort(a["removed"]["id"][()], kind="stable")
-            order_b = np.argsort(b["removed"]["id"][()], kind="stable")
             np.testing.assert_allclose(rb[order_b], ra[order_a], rtol=1e-10, atol=1e-12,
                                        err_msg=k)
         assert len(a["frames"]["step"]) == len(b["frames"]["step"])
