@@ -34,9 +34,11 @@ import trimesh
 from scipy.optimize import brentq
 
 import dpm
-from dpm.boundaries.mesh import triangle_duals
+from dpm.boundaries.mesh import smallest_altitudes, triangle_duals
 from dpm.kernels.boundary_geometry import AXI, SIEVE, SLAB, TORUS, TRIANGLE, closest_any
+from dpm.kernels.boundary_geometry import triangle_distance_within as bg_triangle_distance_within
 from dpm.kernels.boundary_search import brute_force_boundary_pairs
+from dpm.kernels.config import jit
 from dpm.kernels.neighbours import SLOT_SLACK
 
 G = 9.81
@@ -757,6 +759,54 @@ def test_triangle_closest_point_matches_trimesh():
                 assert feature == 4 + int(np.argmax(~zero))
                 checked["vertex"] += 1
     assert min(checked.values()) > 100, checked
+
+
+@jit
+def _within(par, x, y, z, lim):
+    return bg_triangle_distance_within(par, x, y, z, lim)
+
+
+def test_triangle_distance_bound_never_drops_a_triangle_within_reach():
+    """The shortcut of ``triangle_distance_within`` (a triangle certainly farther than
+    ``lim`` returns lim without its closest point) against trimesh's exact distance, on
+    random (also slender) triangles with a half thickness: where it returns the exact
+    answer it equals ``closest_any``'s; where it answers lim, trimesh's distance minus the
+    half thickness is at least lim. The smallest altitude in par[19] is 2 area / longest
+    edge. The shortcut must also fire (else it saves nothing)."""
+    rng = np.random.default_rng(12)
+    fired = exact = 0
+    for _ in range(60):
+        v = rng.normal(size=(3, 3))
+        if rng.random() < 0.3:
+            v[2] = v[0] + rng.uniform(0.01, 2) * (v[1] - v[0]) + 0.02 * rng.normal(size=3)
+        n = np.cross(v[1] - v[0], v[2] - v[0])
+        area2 = np.linalg.norm(n)
+        if area2 < 1e-6:
+            continue
+        h = rng.choice([0.0, 0.05])
+        par = np.zeros(20)
+        par[0:9] = v.ravel()
+        par[9] = h
+        par[10:13] = n / area2
+        par[13:19] = triangle_duals(v[None])[0]
+        par[19] = smallest_altitudes(par[None, 13:19])[0]
+        longest = max(np.linalg.norm(v[1] - v[0]), np.linalg.norm(v[2] - v[1]),
+                      np.linalg.norm(v[0] - v[2]))
+        assert par[19] == pytest.approx(area2 / longest, rel=1e-9)
+        pts = rng.normal(size=(100, 3)) * 1.5
+        ref = trimesh.triangles.closest_point(np.repeat(v[None], len(pts), 0), pts)
+        dist_ref = np.linalg.norm(pts - ref, axis=1) - h
+        for p, dr in zip(pts, dist_ref, strict=True):
+            lim = rng.uniform(0.0, 1.0)
+            d, *_ = _within(par, *p, lim)
+            if d == lim and not d == pytest.approx(dr, abs=1e-12):
+                assert dr >= lim * (1 - 1e-12), (dr, lim)
+                fired += 1
+            else:
+                assert d == pytest.approx(closest_any(TRIANGLE, par, *p, 0.1)[0], abs=1e-15)
+                assert d == pytest.approx(dr, abs=1e-12)
+                exact += 1
+    assert fired > 500 and exact > 500, (fired, exact)
 
 
 def grid_samples(n_u: int, n_v: int):

@@ -300,6 +300,17 @@ def triangle_duals(v: np.ndarray) -> np.ndarray:
     return np.concatenate([g1, g2], axis=1)
 
 
+def smallest_altitudes(duals: np.ndarray) -> np.ndarray:
+    """(m,): each triangle's smallest altitude from its duals (m, 6) of
+    :func:`triangle_duals`: 1 / |g| for g = g1, g2, g1 + g2 (the gradients of the
+    barycentric coordinates s, t and s + t). Zero for a degenerate triangle, whose duals
+    are zero: the kernel's distance bound then never rejects it."""
+    g1, g2 = duals[:, 0:3], duals[:, 3:6]
+    big = np.max(np.stack([np.linalg.norm(g1, axis=1), np.linalg.norm(g2, axis=1),
+                           np.linalg.norm(g1 + g2, axis=1)]), axis=0)
+    return np.where(big > 0.0, 1.0 / np.where(big > 0.0, big, 1.0), 0.0)
+
+
 def triangle_primitives(vertices: np.ndarray, faces: np.ndarray, h: float,
                         flags: np.ndarray) -> Primitives:
     """TRIANGLE primitives of a mesh with half thickness ``h`` and feature ``flags``."""
@@ -312,6 +323,7 @@ def triangle_primitives(vertices: np.ndarray, faces: np.ndarray, h: float,
     par[:, 9] = h
     par[:, 10:13] = n
     par[:, 13:19] = triangle_duals(v)
+    par[:, 19] = smallest_altitudes(par[:, 13:19])
     ids = np.zeros((m, 4), np.int64)
     ids[:, :3] = faces
     ids[:, 3] = flags

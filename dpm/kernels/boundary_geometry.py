@@ -41,8 +41,9 @@ TORUS (3)     bend: centre c [0:3], unit axis a [3:6] (normal of the bend plane)
 TRIANGLE (4)  vertices v0 [0:3], v1 [3:6], v2 [6:9], half thickness h [9], unit face
               normal [10:13], dual in-plane vectors g1 [13:16], g2 [16:19] (g_i . e_j =
               delta_ij for the edges e1 = v1 - v0, e2 = v2 - v0, g_i . n = 0; zero for a
-              row written without them). Closest point of the triangle (Ericson, Real-Time
-              Collision Detection, 2005, 5.1.5) with its feature; both sides touch. A
+              row written without them), smallest altitude [19] (zero: unknown).
+              Closest point of the triangle (Ericson, Real-Time Collision Detection, 2005,
+              5.1.5) with its feature; both sides touch. A
               centre over the triangle's inside (barycentric coordinates s = (x - v0) . g1,
               t = (x - v0) . g2 with s > 0, t > 0, s + t < 1) is a face contact at the
               height (x - v0) . n, found with three dot products before that test.
@@ -382,17 +383,36 @@ def triangle_closest(p, x, y, z):
 
 @inline_jit
 def triangle_distance(p, x, y, z):
+    """(dist, nx, ny, nz, feature) of (x, y, z) to the triangle row ``p`` (both sides)."""
+    return triangle_distance_within(p, x, y, z, math.inf)
+
+
+@inline_jit
+def triangle_distance_within(p, x, y, z, lim):
+    """As :func:`triangle_distance` where the triangle may lie within ``lim``; a triangle
+    that certainly lies farther returns (lim, n, FACE) without its closest point.
+
+    The bound: outside the triangle, the in-plane distance to it is at least the largest
+    violation of s >= 0, t >= 0, s + t <= 1 times the triangle's smallest altitude
+    (p[19]; the distance to the line s = 0 is -s / |g1| and 1 / |g1| is an altitude), so
+    the distance is at least sqrt(height^2 + (violation h_min)^2) - half thickness. Most
+    candidates of a sphere resting on a mesh are its touching triangle's neighbours: each
+    skips Ericson's branches. A row without p[19] (zero) never takes the shortcut."""
     px = x - p[0]
     py = y - p[1]
     pz = z - p[2]
     s = px * p[13] + py * p[14] + pz * p[15]
     t = px * p[16] + py * p[17] + pz * p[18]
     fnx, fny, fnz = p[10], p[11], p[12]
+    hgt = px * fnx + py * fny + pz * fnz
     if s > 0.0 and t > 0.0 and s + t < 1.0:  # over the inside: a face contact
-        hgt = px * fnx + py * fny + pz * fnz
         if hgt < 0.0:
             return -hgt - p[9], -fnx, -fny, -fnz, FACE
         return hgt - p[9], fnx, fny, fnz, FACE
+    e = max(-s, -t, s + t - 1.0) * p[19]
+    m = lim + p[9]
+    if hgt * hgt + e * e > m * m * (1.0 + 1e-9):
+        return lim, fnx, fny, fnz, FACE
     qx, qy, qz, feature = triangle_closest(p, x, y, z)
     ex = x - qx
     ey = y - qy

@@ -41,7 +41,7 @@ from numba import prange
 from .config import inline_jit, row18, row20, step_jit as jit
 from .config import step_pjit as pjit
 from .boundary_geometry import AXI, JOINED, TORUS, TRIANGLE, in_range, touching
-from .boundary_geometry import off_triangle_plane, triangle_distance
+from .boundary_geometry import off_triangle_plane, triangle_distance_within
 from .boundary_search import boundary_motion_since_rebuild, to_local, to_world
 from .mesh_contact import resolve_triangle_contacts
 from .neighbours import _copy_back as copy_back, _merge as merge_history
@@ -416,8 +416,10 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
             w = wl_w[q]
             if w_kind[w] == TRIANGLE:
                 lx, ly, lz = to_local(row18(f_cur, w_owner[w]), xi, yi, zi)
-                dist, lnx, lny, lnz, feature = triangle_distance(row20(w_par, w), lx, ly, lz)
-                tag = feature if dist < (ri + reach if RANGED else ri) else -1
+                lim = ri + reach if RANGED else ri
+                dist, lnx, lny, lnz, feature = triangle_distance_within(row20(w_par, w), lx,
+                                                                        ly, lz, lim)
+                tag = feature if dist < lim else -1
                 wl_tag[q] = tag
                 if tag >= 0:
                     touching_tri += 1
@@ -1015,7 +1017,8 @@ def candidate_distance(kind, par, w, lx, ly, lz, r, reach):
     if HAS_TRIANGLES and kind[w] == TRIANGLE:
         if off_triangle_plane(par, w, lx, ly, lz, reach):
             return np.inf
-        return triangle_distance(par[w], lx, ly, lz)[0]
+        d = triangle_distance_within(par[w], lx, ly, lz, reach)[0]
+        return np.inf if d >= reach else d
     return closest_call(kind[w], par[w], lx, ly, lz, r)[0]
 
 
