@@ -1075,3 +1075,48 @@ def test_mesh_transform_scale_rotate_translate_matches_trimesh(tmp_path):
                      "not a rotation matrix"), ((1, 2, 3), "allowed: \\(ax, ay, az, degrees\\)")]:
         with pytest.raises(dpm.ParameterError, match=f"rotate=.*{msg}"):
             dpm.boundaries.Mesh(steel, file=tmp_path / "part.stl", rotate=bad)
+
+
+def _spheres_thrown_at_a_coarse_ball(n: int = 120):
+    """n spheres (r = 1.4 mm) thrown from a shell at a coarse icosphere (80 triangles, every
+    edge and vertex convex and active), zero gravity: many edge and vertex contacts."""
+    ball = trimesh.creation.icosphere(subdivisions=1, radius=0.01)
+    a = dpm.Material("glass", density=2500.0, young=5e6, poisson=0.45)
+    w = dpm.Material("steel", density=7800.0, young=2e7, poisson=0.3)
+    sim = dpm.Simulation(dt=2e-6, gravity=(0, 0, 0), threads=1)
+    sim.contact(a, a, model="hertz_mindlin", restitution=0.3, friction=0.5)
+    sim.contact(a, w, model="hertz_mindlin", restitution=0.3, friction=0.5)
+    sim.add_boundary("mesh", material=w, vertices=np.asarray(ball.vertices),
+                     faces=np.asarray(ball.faces))
+    rng = np.random.default_rng(3)
+    k = np.arange(n) + 0.5  # a Fibonacci sphere of directions
+    phi = np.arccos(1 - 2 * k / n)
+    theta = np.pi * (1 + 5 ** 0.5) * k
+    u = np.c_[np.cos(theta) * np.sin(phi), np.sin(theta) * np.sin(phi), np.cos(phi)]
+    sim.add_particles("sphere", material=a, radius=1.4e-3, positions=0.0128 * u,
+                      velocities=-0.6 * u + rng.normal(0, 0.2, u.shape))
+    return sim
+
+
+def test_triangle_shortcut_leaves_the_trajectories_bit_for_bit(monkeypatch):
+    """Spheres thrown at a coarse ball mesh (convex edges and vertices) for 8,000 steps:
+    the same state bit for bit with the triangles' smallest altitudes (the distance-bound
+    shortcut) and with them zeroed (every candidate through the exact closest point). The
+    scene is sensitive to a wrong bound: with the altitudes 3x too large the shortcut
+    drops edge and vertex contacts and the state differs."""
+    import dpm.boundaries.mesh as mesh_mod
+
+    def state(sim):
+        sim.run(steps=8000, progress=False)
+        return np.c_[sim.bodies.position, sim.bodies.velocity, sim.bodies.angular_velocity]
+
+    true_altitudes = mesh_mod.smallest_altitudes
+    fast = _spheres_thrown_at_a_coarse_ball()
+    assert fast.boundaries[0].primitives().par[:, 19].min() > 0.0
+    got = state(fast)
+    monkeypatch.setattr(mesh_mod, "smallest_altitudes", lambda duals: np.zeros(len(duals)))
+    want = state(_spheres_thrown_at_a_coarse_ball())
+    assert np.array_equal(got, want)
+    monkeypatch.setattr(mesh_mod, "smallest_altitudes", lambda duals: 3 * true_altitudes(duals))
+    wrong = state(_spheres_thrown_at_a_coarse_ball())
+    assert not np.array_equal(got, wrong)
