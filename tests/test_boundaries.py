@@ -1101,9 +1101,9 @@ def _spheres_thrown_at_a_coarse_ball(n: int = 120):
 def test_triangle_shortcut_leaves_the_trajectories_bit_for_bit(monkeypatch):
     """Spheres thrown at a coarse ball mesh (convex edges and vertices) for 8,000 steps:
     the same state bit for bit with the triangles' smallest altitudes (the distance-bound
-    shortcut) and with them zeroed (every candidate through the exact closest point). The
-    scene is sensitive to a wrong bound: with the altitudes 3x too large the shortcut
-    drops edge and vertex contacts and the state differs."""
+    shortcut) and with them zeroed (then only a candidate whose plane lies past reach skips
+    the exact closest point). The scene is sensitive to a wrong bound: with the altitudes
+    3x too large the shortcut drops edge and vertex contacts and the state differs."""
     import dpm.boundaries.mesh as mesh_mod
 
     def state(sim):

@@ -304,7 +304,7 @@ def smallest_altitudes(duals: np.ndarray) -> np.ndarray:
     """(m,): each triangle's smallest altitude from its duals (m, 6) of
     :func:`triangle_duals`: 1 / |g| for g = g1, g2, g1 + g2 (the gradients of the
     barycentric coordinates s, t and s + t). Zero for a degenerate triangle, whose duals
-    are zero: the kernel's distance bound then never rejects it."""
+    are zero: the kernel's distance bound then rests on the height over its plane alone."""
     g1, g2 = duals[:, 0:3], duals[:, 3:6]
     big = np.max(np.stack([np.linalg.norm(g1, axis=1), np.linalg.norm(g2, axis=1),
                            np.linalg.norm(g1 + g2, axis=1)]), axis=0)

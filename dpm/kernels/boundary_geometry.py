@@ -41,7 +41,7 @@ TORUS (3)     bend: centre c [0:3], unit axis a [3:6] (normal of the bend plane)
 TRIANGLE (4)  vertices v0 [0:3], v1 [3:6], v2 [6:9], half thickness h [9], unit face
               normal [10:13], dual in-plane vectors g1 [13:16], g2 [16:19] (g_i . e_j =
               delta_ij for the edges e1 = v1 - v0, e2 = v2 - v0, g_i . n = 0; zero for a
-              row written without them), smallest altitude [19] (zero: unknown).
+              row written without them), smallest altitude [19] (zero: unknown, height bound only).
               Closest point of the triangle (Ericson, Real-Time Collision Detection, 2005,
               5.1.5) with its feature; both sides touch. A
               centre over the triangle's inside (barycentric coordinates s = (x - v0) . g1,
@@ -397,7 +397,8 @@ def triangle_distance_within(p, x, y, z, lim):
     (p[19]; the distance to the line s = 0 is -s / |g1| and 1 / |g1| is an altitude), so
     the distance is at least sqrt(height^2 + (violation h_min)^2) - half thickness. Most
     candidates of a sphere resting on a mesh are its touching triangle's neighbours: each
-    skips Ericson's branches. A row without p[19] (zero) never takes the shortcut."""
+    skips Ericson's branches. A row without p[19] (zero) keeps the height alone as its
+    bound (the triangle's plane farther than ``lim``)."""
     px = x - p[0]
     py = y - p[1]
     pz = z - p[2]
