@@ -247,16 +247,22 @@ def contains(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray) -> np.
 
 
 def feature_flags(tm, faces: np.ndarray, n_vertices: int) -> np.ndarray:
-    """Per face of the trimesh ``tm``: bits 0-2 edge k active (v_k v_k+1), bits 3-5 vertex
-    k active (see :class:`Mesh`)."""
-    active: dict[tuple[int, int], bool] = {}
+    """Per face of the trimesh ``tm``: bits 0-2 edge k active (v_k v_k+1) and bits 3-5
+    vertex k active, seen from the side the face normals point to (the front); bits 6-8
+    and 9-11 the same seen from behind (see :class:`Mesh`). An edge between two faces is
+    active on a side where it is convex: an edge convex from the front is concave from
+    behind and the other way round, so a sphere touching a fold from its back (a
+    two-sided chute hit from below) finds the edge that the front's rules leave to the
+    faces. Open borders and non-manifold edges are active on both sides, edges between
+    coplanar faces on neither; a vertex is active on a side where one of its edges is."""
     count: dict[tuple[int, int], int] = {}
     for f in faces:
         for k in range(3):
             e = tuple(sorted((int(f[k]), int(f[(k + 1) % 3]))))
             count[e] = count.get(e, 0) + 1
-    for e, c in count.items():
-        active[e] = c != 2  # open borders (1) and non-manifold edges (>2) stay active
+    # open borders (1) and non-manifold edges (>2) stay active on both sides
+    front = {e: c != 2 for e, c in count.items()}
+    back = dict(front)
     if len(tm.face_adjacency):
         edges = np.sort(tm.face_adjacency_edges, axis=1)
         angles = tm.face_adjacency_angles
@@ -264,20 +270,22 @@ def feature_flags(tm, faces: np.ndarray, n_vertices: int) -> np.ndarray:
         for (a, b), ang, cvx in zip(edges, angles, convex, strict=True):
             e = (int(a), int(b))
             if count.get(e) == 2:
-                active[e] = bool(cvx and ang > FLAT_ANGLE)
-    vertex_active = np.zeros(n_vertices, bool)
-    for (a, b), on in active.items():
-        if on:
-            vertex_active[a] = vertex_active[b] = True
+                front[e] = bool(cvx and ang > FLAT_ANGLE)
+                back[e] = bool(not cvx and ang > FLAT_ANGLE)
     flags = np.zeros(len(faces), np.int64)
-    for n, f in enumerate(faces):
-        bits = 0
-        for k in range(3):
-            if active[tuple(sorted((int(f[k]), int(f[(k + 1) % 3]))))]:
-                bits |= 1 << k
-            if vertex_active[f[k]]:
-                bits |= 1 << (3 + k)
-        flags[n] = bits
+    for shift, active in ((0, front), (6, back)):
+        vertex_active = np.zeros(n_vertices, bool)
+        for (a, b), on in active.items():
+            if on:
+                vertex_active[a] = vertex_active[b] = True
+        for n, f in enumerate(faces):
+            bits = 0
+            for k in range(3):
+                if active[tuple(sorted((int(f[k]), int(f[(k + 1) % 3]))))]:
+                    bits |= 1 << k
+                if vertex_active[f[k]]:
+                    bits |= 1 << (3 + k)
+            flags[n] |= bits << shift
     return flags
 
 

@@ -11,7 +11,10 @@ per mesh, applied to the contacts the closest-point test found (``tag``: feature
    centre lies over their common edge) count once.
 2. A contact whose closest point is an edge or vertex that the mesh marks inactive
    (edges between coplanar or concave neighbours, vertices whose edges are all inactive)
-   does not count: a neighbouring face carries that contact.
+   does not count: a neighbouring face carries that contact. Convex and concave are seen
+   from the side of the triangle the sphere's centre is on (the sign of the contact normal
+   along the face normal): a fold concave from the front is convex from behind, where a
+   two-sided mesh is touched too (a chute plate hit from below).
 3. A contact at an active (convex or open) edge or vertex does not count if a face contact
    of a triangle sharing that edge or vertex counts, nor if an earlier triangle already
    has a contact at the same edge or vertex.
@@ -21,7 +24,8 @@ ends, the new one takes over the contact history (tangential spring), so a spher
 crossing an edge keeps its friction state.
 
 Triangle feature flags (``ids[w, 3]``): bit k (k = 0, 1, 2) edge k active (v0v1, v1v2,
-v2v0); bit 3 + k vertex k active.
+v2v0); bit 3 + k vertex k active, seen from the front (the face normal's side); bits
+6 + k and 9 + k the same seen from behind (:func:`dpm.boundaries.mesh.feature_flags`).
 """
 
 from .boundary_geometry import TRIANGLE
@@ -43,9 +47,11 @@ def _has_vertex(ids, v):
 
 @jit
 def resolve_triangle_contacts(q0, q1, wl_w, wl_tag, w_kind, w_owner, w_ids, w_par, wl_active,
-                              wl_hist):
+                              wl_hist, wl_f):
     """Apply rules 1-3 to the entries q0..q1 of one element (tags set to -1 where a contact
-    does not count), then hand over history to contacts that start."""
+    does not count), then hand over history to contacts that start. ``wl_f[q, 1:4]``: the
+    contact normal of entry q (centre minus closest point, in the boundary's frame), whose
+    sign along the face normal says which side's feature flags apply."""
     for q in range(q0, q1):
         w = wl_w[q]
         if w_kind[w] != TRIANGLE:
@@ -72,6 +78,9 @@ def resolve_triangle_contacts(q0, q1, wl_w, wl_tag, w_kind, w_owner, w_ids, w_pa
                     break
             continue
         va, vb, bit = _feature_vertices(t, ids)
+        if (wl_f[q, 1] * w_par[w, 10] + wl_f[q, 2] * w_par[w, 11]
+                + wl_f[q, 3] * w_par[w, 12]) < 0.0:
+            bit += 6  # the centre is behind this triangle: the back's flags
         if not (ids[3] >> bit) & 1:
             wl_tag[q] = -1  # rule 2
             continue

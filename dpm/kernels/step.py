@@ -434,7 +434,7 @@ def boundary_contacts(i, xi, yi, zi, ri, bi, mi, dt, b_pos, b_vel, b_angvel, b_m
                 wl_f[q, 3] = lnz
         if touching_tri > 1 or rules or (starts and ends):
             resolve_triangle_contacts(q0, q1, wl_w, wl_tag, w_kind, w_owner, w_ids,
-                                      w_par, wl_active, wl_hist)
+                                      w_par, wl_active, wl_hist, wl_f)
     if HAS_JOINTS:
         joint_hand_over(q0, q1, xi, yi, zi, ri, wl_w, wl_active, wl_hist, w_kind, w_par,
                         w_owner, f_cur)
