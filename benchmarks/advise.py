@@ -56,30 +56,27 @@ import os
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 os.environ.setdefault("DPM_BACKGROUND_COMPILE", "0")
 
-import argparse
 import json
 import math
-import platform
 import sys
 import tempfile
 import time
 import warnings
 from pathlib import Path
 
+import harness
 import numpy as np
+
+import dpm
+from dpm.advice import Setting, apply_setting, run_and_measure
+from dpm.advice.condense import condense
+from dpm.advice.scene import scene_facts
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
-sys.path.insert(0, str(HERE.parent / "examples"))
-
-import box_settle  # noqa: E402
-import hopper_discharge  # noqa: E402
-import rotating_drum  # noqa: E402
-
-import dpm  # noqa: E402
-from dpm.advice import Setting, apply_setting, run_and_measure  # noqa: E402
-from dpm.advice.condense import condense  # noqa: E402
-from dpm.advice.scene import scene_facts  # noqa: E402
+box_settle = harness.example("box_settle")
+hopper_discharge = harness.example("hopper_discharge")
+rotating_drum = harness.example("rotating_drum")
 
 N_REF = 80.0        # steps per shortest contact of the reference runs
 MAX_RAYLEIGH = 0.3  # the advisor's default cap on dt / Rayleigh step
@@ -493,9 +490,7 @@ def table(result: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true",
-                    help="calibrate and check on the small scenes (a smoke test)")
+    ap = harness.parser(__doc__, "calibrate and check on the small scenes (a smoke test)")
     ap.add_argument("--calibration", default=None, metavar="JSON",
                     help="take the calibration from this earlier result (advise.json or "
                     "advise_quick.json: the same small scenes) instead of running it")
@@ -546,8 +541,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"calibration from {a.calibration}", flush=True)
     else:
         cal = calibration_phase(pick(scenes(True)), a.workers)
-    result = {"quick": a.quick, "machine": {"python": platform.python_version(),
-                                           "cpu": platform.processor() or platform.machine()},
+    result = {"quick": a.quick, "run": harness.machine() | {"argv": sys.argv[1:]},
               "n_ref": N_REF, "max_rayleigh": MAX_RAYLEIGH, "z": 2.0, "workers": a.workers,
               "calibration": cal}
     RESULTS.mkdir(exist_ok=True)
@@ -573,7 +567,7 @@ def main(argv: list[str] | None = None) -> int:
                                    cal if a.quick and not a.calibration else None)
     result["wall_s"] = time.perf_counter() - t0
     path.write_text(json.dumps(result, indent=1, default=str))
-    plot(result, RESULTS / f"{stem}.png")
+    harness.png(plot, result, path=RESULTS / f"{stem}.png")
     print()
     print(table(result))
     print(f"\nwrote {path} and .png ({result['wall_s']:.0f} s)")

@@ -30,24 +30,20 @@ turns it, with the other benchmark results, into ``dpm/data/work_precision.json`
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
-import platform
-import sys
 import time
 from pathlib import Path
 
+import harness
 import numba
 import numpy as np
+import shared_scenes as im  # the references of impact_models.py: same scene, same solvers
+
+import dpm
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
-sys.path.insert(0, str(HERE))
-
-import impact_models as im  # noqa: E402  (the references: same scene, same solvers)
-
-import dpm  # noqa: E402
 
 MODELS = ["hertz_mindlin", "hooke", "walton_braun", "hertz_brilliantov"]
 RESTITUTIONS = [0.1, 0.3, 0.5, 0.7, 0.9, 1.0]
@@ -195,9 +191,7 @@ def sweep(integrators: list[str], models: list[str], restitutions: list[float],
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true",
-                    help="velocity Verlet and gear4 only, fewer rows")
+    ap = harness.parser(__doc__, "velocity Verlet and gear4 only, fewer rows")
     ap.add_argument("--integrator", action="append", default=None,
                     help="only this integrator (repeatable)")
     a = ap.parse_args(argv)
@@ -216,19 +210,15 @@ def main(argv: list[str] | None = None) -> int:
     result = {"scene": {"radius_m": R, "density": RHO, "young_Pa": YOUNG, "poisson": NU,
                         "impact_speed_m_s": V, "geometry": "sphere on a plane, head-on",
                         "phases": PHASES, "worst_of_phases": True},
-              "machine": {"python": platform.python_version(),
-                          "cpu": platform.processor() or platform.machine()},
               "equivalent": {"linear_spring_dashpot": "hooke", "maw_linear_spring": "hooke",
                              "linear_cohesion": "hertz_mindlin"},
               "table": table}
-    RESULTS.mkdir(exist_ok=True)
-    stem = "advise_contact_errors_quick" if a.quick else "advise_contact_errors"
-    path = RESULTS / f"{stem}.json"
+    path = RESULTS / f"{harness.stem('advise_contact_errors', a.quick)}.json"
     if a.integrator and path.exists():  # add to what an earlier run measured
         old = json.loads(path.read_text())
         old["table"].update(table)
         result["table"] = old["table"]
-    path.write_text(json.dumps(result, indent=1))
+    path = harness.write("advise_contact_errors", result, a.quick)
     print(f"wrote {path}")
     return 0
 

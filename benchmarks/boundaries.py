@@ -30,11 +30,9 @@ Run: ``python benchmarks/boundaries.py`` (writes benchmarks/results/boundaries.j
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
-import platform
 import re
 import shutil
 import subprocess
@@ -42,6 +40,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import harness
 import numba
 import numpy as np
 
@@ -327,8 +326,7 @@ def plot(res: dict, path: Path) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--quick", action="store_true")
+    ap = harness.parser(__doc__, "fewer sizes")
     ap.add_argument("--no-liggghts", action="store_true", help="skip the LIGGGHTS peer")
     ap.add_argument("--plot-only", action="store_true", help="redraw the PNG from the JSON")
     args = ap.parse_args()
@@ -338,8 +336,7 @@ def main() -> None:
         return
     numba.set_num_threads(1)  # the search kernels are parallel loops; time one thread
     sizes = [1, 3, 10, 32, 100, 316] if not args.quick else [1, 10, 100]
-    res = {"machine": platform.processor() or platform.machine(),
-           "numba": numba.__version__, "per_kind_ns": per_kind()}
+    res = {"per_kind_ns": per_kind()}
     print(res["per_kind_ns"], flush=True)
     mesh_scaling([1], n_spheres=1, steps=5, sphere_steps=0)  # compile / load the step module first
     res["mesh"] = mesh_scaling(sizes, liggghts=not args.no_liggghts)
@@ -353,11 +350,9 @@ def main() -> None:
     res["liggghts"] = (None if args.no_liggghts or shutil.which("liggghts") is None else
                        subprocess.run(["liggghts", "-h"], capture_output=True, text=True)
                        .stdout.split("\n\n")[0].strip()[:120])
-    OUT.mkdir(exist_ok=True)
-    name = "boundaries_quick" if args.quick else "boundaries"
-    (OUT / f"{name}.json").write_text(json.dumps(res, indent=1))
-    plot(res, OUT / f"{name}.png")
-    print("wrote", OUT / f"{name}.json")
+    path = harness.write("boundaries", res, args.quick)
+    harness.png(plot, res, path=path.with_suffix(".png"))
+    print("wrote", path)
 
 
 if __name__ == "__main__":

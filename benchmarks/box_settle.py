@@ -12,11 +12,8 @@ figures, their ratio and the mean heights) and box_settle.png.
 
 from __future__ import annotations
 
-import argparse
-import importlib.util
 import json
 import os
-import platform
 import re
 import shutil
 import subprocess
@@ -24,6 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import harness
 import numba
 
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
@@ -33,16 +31,8 @@ SCENE = HERE / "scenes" / "box_settle"
 RESULTS = HERE / "results"
 
 
-def _example():
-    spec = importlib.util.spec_from_file_location("box_settle_example",
-                                                  HERE.parent / "examples" / "box_settle.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def run_dpm(lat, steps, threads=1, warmup=20):
-    ex = _example()
+    ex = harness.example("box_settle")
     csv = ex.initial_packing(*lat)
     t0 = time.perf_counter()
     sim = ex.build(csv)
@@ -60,27 +50,8 @@ def run_dpm(lat, steps, threads=1, warmup=20):
             "neighbour_rebuilds": sim.rebuild_count}
 
 
-def software() -> dict:
-    """What a run's speed depends on besides dpm's code: the processor's model name and the
-    versions of Python, numba, llvmlite and numpy (stop 42 found dpm's one thread 30 % slower
-    than stop 41's on the same code, and could not say whether any of these had changed)."""
-    import llvmlite
-    import numpy
-
-    cpu = platform.processor()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return {"cpu": cpu, "python": platform.python_version(), "numba": numba.__version__,
-            "llvmlite": llvmlite.__version__, "numpy": numpy.__version__}
-
-
 def run_liggghts(lat, steps):
-    exe = shutil.which("liggghts")
+    exe = harness.liggghts()
     if exe is None:
         return None
     with tempfile.TemporaryDirectory() as tmp:
@@ -103,9 +74,6 @@ def run_liggghts(lat, steps):
 
 
 def plot(result, path):
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     names, vals, colors = ["dpm 1 thread"], [result["dpm"]["particle_steps_per_s"]], ["tab:blue"]
@@ -134,8 +102,7 @@ def plot(result, path):
 
 
 def main():
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--quick", action="store_true")
+    p = harness.parser(__doc__, "1,000 spheres, 2,000 steps")
     p.add_argument("--lattice", type=int, nargs=3, default=None)
     p.add_argument("--steps", type=int, default=None)
     p.add_argument("--no-liggghts", action="store_true")
@@ -148,17 +115,13 @@ def main():
     d2 = run_dpm(lat, steps, threads=2) if numba.config.NUMBA_NUM_THREADS >= 2 else None
     lg = None if a.no_liggghts else run_liggghts(lat, steps)
     lps = lg["particle_steps_per_s"] if lg else None
-    result = {"scene": "box_settle", "lattice": lat, "machine": platform.processor()
-              or platform.machine(), "cores": os.cpu_count(), "software": software(),
-              "dpm": d, "dpm_2_threads": d2,
-              "liggghts": lg, "ratio": d["particle_steps_per_s"] / lps if lg else None,
-              "ratio_2_threads": d2["particle_steps_per_s"] / lps if lg and d2 else None,
+    result = {"scene": "box_settle", "lattice": lat, "dpm": d, "dpm_2_threads": d2,
+              "liggghts": lg, "ratio": harness.ratio(d["particle_steps_per_s"], lps),
+              "ratio_2_threads": harness.ratio(d2["particle_steps_per_s"], lps) if d2 else None,
               "mean_z_rel_diff": (d["mean_z_m"] / lg["mean_z_m"] - 1)
               if lg and lg["mean_z_m"] else None}
-    RESULTS.mkdir(exist_ok=True)
-    tag = a.tag or ("box_settle" if not a.quick else "box_settle_quick")
-    (RESULTS / f"{tag}.json").write_text(json.dumps(result, indent=2))
-    plot(result, RESULTS / f"{tag}.png")
+    path = harness.write("box_settle", result, a.quick, a.tag, indent=2)
+    harness.png(plot, result, path=path.with_suffix(".png"))
     print(json.dumps(result, indent=2))
 
 

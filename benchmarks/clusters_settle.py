@@ -43,16 +43,16 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import re
-import shutil
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
+import harness
 import numpy as np
+from shared_scenes import LIGGGHTS_BOX_MATERIALS, LIGGGHTS_HEADER
 
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
@@ -85,18 +85,9 @@ def geometry(n: int, side: float) -> dict:
             "settle_steps": settle, "window_steps": WINDOW}
 
 
-def _common_lines() -> str:
-    """meshgran.py's LIGGGHTS input up to its own model (the header of these benchmarks,
-    the box, the neighbour list, the four material properties), on this scene's box."""
-    sys.path.insert(0, str(HERE))
-    import meshgran
-
-    text = meshgran.LIGGGHTS_IN[:meshgran.LIGGGHTS_IN.index("fix m5 ")]
-    box = "region reg block 0 {side} 0 {side} 0 {top} units box"
-    return re.sub(r"region reg block [^\n]*", box, text, count=1)
-
-
-LIGGGHTS_IN = _common_lines() + """\
+#: the header and box lines shared with meshgran.py (shared_scenes), on this scene's box
+LIGGGHTS_IN = LIGGGHTS_HEADER + LIGGGHTS_BOX_MATERIALS.format(
+    region="0 {side} 0 {side} 0 {top}") + """\
 pair_style gran model hertz tangential history
 pair_coeff * *
 timestep {dt}
@@ -151,7 +142,7 @@ def _dump(path: Path) -> np.ndarray:
 
 
 def run_liggghts(n: int, geo: dict, seed: int, keep: Path | None) -> dict | None:
-    exe = shutil.which("liggghts")
+    exe = harness.liggghts()
     if exe is None:
         return None
     reg = geo["region"]
@@ -340,9 +331,6 @@ def packing(spheres: np.ndarray, lo, hi, samples: int = 400_000) -> float:
 
 
 def plot(result: dict, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.2))
@@ -390,8 +378,7 @@ def plot(result: dict, path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> dict:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--quick", action="store_true", help="300 clusters")
+    p = harness.parser(__doc__, "300 clusters")
     p.add_argument("--bodies", type=int, default=None)
     p.add_argument("--no-liggghts", action="store_true")
     p.add_argument("--worker", nargs=3, help=argparse.SUPPRESS)
@@ -482,19 +469,15 @@ def main(argv: list[str] | None = None) -> dict:
               "material": {"density": DENSITY, "young": YOUNG, "poisson": POISSON,
                            "restitution": RESTITUTION, "friction": FRICTION},
               "geometry": geo, "seeds": list(SEEDS) if runs else None,
-              "machine": platform.processor() or platform.machine(), "cores": os.cpu_count(),
-              "timing_note": "2-core machine (load average in load_average); dpm "
+              "timing_note": "2-core machine (load average in run.load_average); dpm "
                              "threads given (DPM_THREADS in subprocesses, sim.threads set) after a "
                              "warm-up that compiles; LIGGGHTS one core; ru_maxrss includes "
                              "each process's base (Python + numba for dpm)",
-              "load_average": os.getloadavg(),
               "physics": physics, "speed_ratios": speed, "memory": mem,
               "dpm": dpm_runs, "dpm_2_threads": d2, "liggghts": runs or None}
-    RESULTS.mkdir(exist_ok=True)
-    stem = (f"clusters_settle_{n}" if a.bodies else "clusters_settle_quick" if a.quick
-            else "clusters_settle")
-    (RESULTS / f"{stem}.json").write_text(json.dumps(result, indent=1))
-    plot(result, RESULTS / f"{stem}.png")
+    path = harness.write("clusters_settle", result, a.quick,
+                         tag=f"clusters_settle_{n}" if a.bodies else None)
+    harness.png(plot, result, path=path.with_suffix(".png"))
     print(json.dumps({"physics": physics, "speed_ratios": speed, "memory": mem}, indent=1))
     return result
 

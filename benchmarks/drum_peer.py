@@ -53,7 +53,6 @@ import argparse
 import json
 import math
 import os
-import platform
 import re
 import shutil
 import subprocess
@@ -469,9 +468,6 @@ def speeds(runs: dict, n: int, cfg: dict) -> dict:
 
 
 def plot(result: dict, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(2, 3, figsize=(16, 8.5))
@@ -524,8 +520,9 @@ def plot(result: dict, path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> dict:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--quick", action="store_true", help="12 mm deep drum, 1.2 s")
+    import harness  # (here: tests/ load this file by path)
+
+    p = harness.parser(__doc__, "12 mm deep drum, 1.2 s")
     p.add_argument("--no-liggghts", action="store_true")
     p.add_argument("--worker", nargs=5, help=argparse.SUPPRESS)
     a = p.parse_args(argv)
@@ -581,7 +578,6 @@ def main(argv: list[str] | None = None) -> dict:
                            "friction": {"bead-bead": MU_PP, "bead-wall": MU_PW},
                            "rolling_friction": 0.0},
               "surface_fit": SURFACE, "starts": list(STARTS),
-              "machine": platform.processor() or platform.machine(), "cores": os.cpu_count(),
               "load_average": [min(loads), max(loads)],
               "timing_note": ("load_average: 1-minute figures sampled between runs (on 2 "
                               "cores, above ~1.2 another process shared the machine and the "
@@ -589,10 +585,8 @@ def main(argv: list[str] | None = None) -> dict:
                               "it); dpm after a warm-up that compiles; LIGGGHTS one core"),
               "physics": physics, "speed": speed, "memory_max_rss": mem,
               "dpm_compile_or_load": prep, "runs": runs}
-    RESULTS.mkdir(exist_ok=True)
-    stem = "drum_peer_quick" if a.quick else "drum_peer"
-    (RESULTS / f"{stem}.json").write_text(json.dumps(result, indent=1))
-    plot(result, RESULTS / f"{stem}.png")
+    path = harness.write("drum_peer", result, a.quick)
+    harness.png(plot, result, path=path.with_suffix(".png"))
     print(json.dumps({"physics": physics, "speed": speed, "memory": mem}, indent=1))
     return result
 

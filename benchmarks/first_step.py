@@ -17,16 +17,15 @@ box_settle's 10,000 spheres are stepped on both modules, both warm, A/B in turn.
 
     python benchmarks/first_step.py            # every example, ~20 min on 2 cores
     python benchmarks/first_step.py --examples box_settle rotating_drum
+    python benchmarks/first_step.py --quick    # box_settle only (dpm compile still runs)
 
-Writes ``benchmarks/results/first_step.json`` and ``.png``.
+Writes ``benchmarks/results/first_step[_quick].json`` and ``.png``.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
-import platform
 import re
 import shutil
 import statistics
@@ -35,6 +34,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+import harness
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results"
@@ -128,13 +129,17 @@ def plot(result: dict, path: Path) -> None:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--examples", nargs="*", default=list(EXAMPLES), choices=list(EXAMPLES))
+    ap = harness.parser(__doc__, "box_settle only, one A/B pair of 300 steps")
+    ap.add_argument("--examples", nargs="*", default=None, choices=list(EXAMPLES))
     ap.add_argument("--jobs", type=int, default=2, help="dpm compile --jobs")
-    ap.add_argument("--pairs", type=int, default=3, help="A/B pairs of the speed run")
-    ap.add_argument("--steps", type=int, default=3000, help="steps of the speed run")
-    ap.add_argument("--out", default=str(OUT / "first_step.json"))
+    ap.add_argument("--pairs", type=int, default=None, help="A/B pairs of the speed run (3)")
+    ap.add_argument("--steps", type=int, default=None, help="steps of the speed run (3000)")
+    ap.add_argument("--out", default=None, help="JSON path (results/first_step[_quick].json)")
     args = ap.parse_args()
+    if args.examples is None:
+        args.examples = ["box_settle"] if args.quick else list(EXAMPLES)
+    args.pairs = args.pairs or (1 if args.quick else 3)
+    args.steps = args.steps or (300 if args.quick else 3000)
     root = Path(tempfile.mkdtemp(prefix="dpm-first-step-"))
     base = root / "compiled"
     env = dict(os.environ, DPM_CACHE_DIR=str(base), DPM_BACKGROUND_COMPILE="0",
@@ -143,8 +148,7 @@ def main() -> int:
     compile_s, _ = timed([sys.executable, "-m", "dpm.cli", "compile", "--jobs",
                           str(args.jobs)], env, str(root))
     print(f"dpm compile --jobs {args.jobs}: {compile_s:.1f} s", flush=True)
-    result = {"machine": f"{platform.machine()}, {os.cpu_count()} cores",
-              "dpm_compile_s": compile_s, "dpm_compile_jobs": args.jobs, "examples": {}}
+    result = {"dpm_compile_s": compile_s, "dpm_compile_jobs": args.jobs, "examples": {}}
     for ex in args.examples:
         cache = root / ex
         shutil.copytree(base, cache)
@@ -161,10 +165,13 @@ def main() -> int:
     result["box_settle_speed"] = spd
     print(f"box_settle 10,000 x {args.steps}: universal / own wall "
           f"{spd['universal_over_own']:.3f}", flush=True)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(result, indent=1))
-    plot(result, out.with_suffix(".png"))
+    if args.out:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(result | {"run": harness.machine()}, indent=1))
+    else:
+        out = harness.write("first_step", result, args.quick)
+    harness.png(plot, result, path=out.with_suffix(".png"))
     shutil.rmtree(root, ignore_errors=True)
     print(f"wrote {out} and {out.with_suffix('.png')}")
     return 0

@@ -3,6 +3,7 @@
 On a machine with an NVIDIA GPU (``pip install 'dpm-granular[cuda]'``)::
 
     python benchmarks/gpu.py                 # writes benchmarks/results/gpu.json
+    python benchmarks/gpu.py --quick         # 1e4 only, no mill: results/gpu_quick.json
 
 - box_settle (``examples/box_settle.py``) at 1e4, 1e5 and 1e6 spheres: particle-steps/s
   of ``device="cuda"`` and of the CPU path (every core) in the same run, the same number
@@ -21,8 +22,6 @@ timings mean nothing). ``--budget`` (s) skips what would start after it.
 
 from __future__ import annotations
 
-import argparse
-import importlib.util
 import json
 import math
 import os
@@ -30,6 +29,8 @@ import platform
 import sys
 import time
 from pathlib import Path
+
+import harness
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -39,15 +40,9 @@ RESULTS = HERE / "results"
 SIZES = {"1e4": ((20, 20, 25), 20000), "1e5": ((50, 50, 40), 2000),
          "1e6": ((100, 100, 100), 400)}
 SIM_SIZES = {"27": ((3, 3, 3), 12)}
+#: --quick: 1e4 spheres for 2,000 steps, no ball mill
+QUICK_SIZES = {"1e4": ((20, 20, 25), 2000)}
 WARMUP = 20
-
-
-def _example(name: str):
-    spec = importlib.util.spec_from_file_location(f"{name}_example",
-                                                  ROOT / "examples" / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def _backend(device: str):
@@ -65,7 +60,7 @@ def _backend(device: str):
 
 def box_settle(lat, steps: int, device: str) -> dict:
     warmup = min(WARMUP, steps // 2)
-    ex = _example("box_settle")
+    ex = harness.example("box_settle")
     csv = ex.initial_packing(*lat)
     t0 = time.perf_counter()
     sim = ex.build(csv)
@@ -94,7 +89,7 @@ def box_settle(lat, steps: int, device: str) -> dict:
 
 
 def mill(steps: int, settle: int) -> dict:
-    bm = _example("ball_mill")
+    bm = harness.example("ball_mill")
     t0 = time.perf_counter()
     sim = bm.build(0.7, length=bm.L_MILL, periodic=False, ramp=0.0)
     sim.backend = _backend("cuda")
@@ -144,7 +139,8 @@ def environment(sim_mode: bool) -> dict:
 
 
 def main(argv: list[str] | None = None) -> dict:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = harness.parser(__doc__, "1e4 spheres for 2,000 steps, no ball mill "
+                                "(writes results/gpu_quick.json)")
     p.add_argument("--sim", action="store_true", help="tiny sizes on the CUDA simulator")
     p.add_argument("--sizes", nargs="*", default=None, help="box_settle sizes (1e4 1e5 1e6)")
     p.add_argument("--mill-steps", type=int, default=1000)
@@ -163,7 +159,8 @@ def main(argv: list[str] | None = None) -> dict:
     sim_mode = simulator()
     start = time.perf_counter()
     res: dict = {"issue": 19, "environment": environment(sim_mode), "box_settle": {}}
-    sizes = SIM_SIZES if sim_mode else {k: SIZES[k] for k in (a.sizes or SIZES)}
+    sizes = (SIM_SIZES if sim_mode else QUICK_SIZES if a.quick and not a.sizes
+             else {k: SIZES[k] for k in (a.sizes or SIZES)})
 
     def left() -> bool:
         return time.perf_counter() - start < a.budget
@@ -187,7 +184,7 @@ def main(argv: list[str] | None = None) -> dict:
             row["speedup_host_gate"] = (row["cuda_host_gate"]["particle_steps_per_s"]
                                         / c["particle_steps_per_s"])
         res["box_settle"][name] = row
-    if sim_mode or a.no_mill:
+    if sim_mode or a.no_mill or a.quick:
         res["mill"] = "skipped" + (" on the simulator" if sim_mode else "")
     elif left():
         res["mill"] = mill(a.mill_steps, a.mill_settle)
@@ -205,9 +202,11 @@ def main(argv: list[str] | None = None) -> dict:
         if a.out:
             Path(a.out).write_text(text)
         return res
-    out = Path(a.out) if a.out else RESULTS / "gpu.json"
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text)
+    if a.out:
+        Path(a.out).parent.mkdir(parents=True, exist_ok=True)
+        Path(a.out).write_text(text)
+    else:
+        harness.write("gpu", json.loads(text), a.quick)
     return res
 
 

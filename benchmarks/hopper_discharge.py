@@ -12,47 +12,37 @@ core each (LIGGGHTS keeps the beads that fell out, dpm's outlet removes them). T
 the LIGGGHTS run reaches 3 m down: with ``boundary f f f`` a bead that leaves the box is
 lost and the count of those that fell out would miss it.
 
-    python benchmarks/hopper_discharge.py [--orifice 0.025] [--no-liggghts]
+    python benchmarks/hopper_discharge.py [--quick] [--orifice 0.025] [--no-liggghts]
 
-Writes benchmarks/results/hopper_discharge.json.
+Writes benchmarks/results/hopper_discharge[_quick].json.
 """
 
 from __future__ import annotations
 
-import argparse
-import importlib.util
-import json
 import os
 import re
 import shutil
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
+import harness
 import numpy as np
+from shared_scenes import LIGGGHTS_HEADER
 
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 HERE = Path(__file__).resolve().parent
 # the example's scene (loaded by path: this script has the same module name)
-_spec = importlib.util.spec_from_file_location("hopper_example",
-                                               HERE.parent / "examples" / "hopper_discharge.py")
-hd = importlib.util.module_from_spec(_spec)
-sys.modules["hopper_example"] = hd
-_spec.loader.exec_module(hd)
+hd = harness.example("hopper_discharge")
 
 RESULTS = HERE / "results"
 RADIUS, HEIGHT = 0.04, 0.1
+#: --quick: a lower bed and a shorter rate window
+QUICK_HEIGHT, QUICK_WINDOW = 0.05, 0.1
 
-LIGGGHTS_IN = """\
-atom_style granular
-atom_modify map array
-boundary f f f
-newton off
-communicate single vel yes
-units si
+LIGGGHTS_IN = LIGGGHTS_HEADER + """\
 read_data silo.data
 neighbor {skin} bin
 neigh_modify delay 0
@@ -95,8 +85,8 @@ def floor_stl(path: Path, hole: float, outer: float, n: int = 64) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
-def run_dpm(orifice: float, window: float) -> dict:
-    sim, _ = hd.silo(orifice, radius=RADIUS, height=HEIGHT)
+def run_dpm(orifice: float, window: float, height: float = HEIGHT) -> dict:
+    sim, _ = hd.silo(orifice, radius=RADIUS, height=height)
     mass = float(sim.bodies.mass.sum())
     r = hd.discharge(sim, window)
     r["bulk_density"] = hd.bulk_density(sim, mass, RADIUS, r["bed_top_m"])
@@ -106,11 +96,11 @@ def run_dpm(orifice: float, window: float) -> dict:
 
 
 def run_liggghts(orifice: float, skin: float, window: float,
-                 keep: str | None = None) -> dict | None:
-    exe = shutil.which("liggghts")
+                 keep: str | None = None, height: float = HEIGHT) -> dict | None:
+    exe = harness.liggghts()
     if exe is None:
         return None
-    sim, _ = hd.silo(orifice, radius=RADIUS, height=HEIGHT)
+    sim, _ = hd.silo(orifice, radius=RADIUS, height=height)
     pos, rad = sim.bodies.position, sim.bodies.radius
     m1 = float(sim.bodies.mass[0])
     dt = hd.DT
@@ -150,29 +140,33 @@ def run_liggghts(orifice: float, skin: float, window: float,
 
 
 def main(argv: list[str] | None = None) -> dict:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = harness.parser(__doc__, f"a bed {QUICK_HEIGHT * 1e3:.0f} mm high, a rate window of "
+                                f"{QUICK_WINDOW} s")
     p.add_argument("--orifice", type=float, default=0.025)
-    p.add_argument("--window", type=float, default=0.5, help="rate window [s]")
+    p.add_argument("--window", type=float, default=None, help="rate window [s] (0.5)")
     p.add_argument("--no-liggghts", action="store_true")
     a = p.parse_args(argv)
     import numba
 
     numba.set_num_threads(1)
-    d = run_dpm(a.orifice, a.window)
+    height = QUICK_HEIGHT if a.quick else HEIGHT
+    a.window = a.window or (QUICK_WINDOW if a.quick else 0.5)
+    d = run_dpm(a.orifice, a.window, height)
     print(f"dpm: W = {d['rate_kg_s']:.4f} kg/s, {d['particle_steps_per_s']:.3g} "
           "particle-steps/s", flush=True)
-    lg = None if a.no_liggghts else run_liggghts(a.orifice, d["skin"], a.window)
-    result = {"orifice_m": a.orifice, "silo_radius_m": RADIUS, "d": hd.D_BEAD,
+    lg = None if a.no_liggghts else run_liggghts(a.orifice, d["skin"], a.window,
+                                                 height=height)
+    result = {"orifice_m": a.orifice, "silo_radius_m": RADIUS, "bed_height_m": height,
+              "d": hd.D_BEAD,
               "window_s": a.window, "dpm": d, "liggghts": lg}
     if lg:
         result["rate_ratio_dpm_over_liggghts"] = d["rate_kg_s"] / lg["rate_kg_s"]
-        result["speed_ratio_dpm_over_liggghts"] = (d["particle_steps_per_s"]
-                                                   / lg["particle_steps_per_s"])
+        result["speed_ratio_dpm_over_liggghts"] = harness.ratio(d["particle_steps_per_s"],
+                                                                lg["particle_steps_per_s"])
         print(f"LIGGGHTS: W = {lg['rate_kg_s']:.4f} kg/s, {lg['particle_steps_per_s']:.3g} "
               f"particle-steps/s; W ratio dpm / LIGGGHTS "
               f"{result['rate_ratio_dpm_over_liggghts']:.3f}")
-    RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "hopper_discharge.json").write_text(json.dumps(result, indent=1))
+    harness.write("hopper_discharge", result, a.quick)
     return result
 
 

@@ -21,94 +21,39 @@ impact_models_quick.*) and prints the speed-against-error table.
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 import os
-import platform
 import time
 from pathlib import Path
 
+import harness
 import numba
 import numpy as np
 from numba import njit
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 from scipy.spatial import cKDTree
+from shared_scenes import (  # the head-on impact and its analytic references
+    ESTAR,
+    KH,
+    NAMES,
+    NU,
+    RHO,
+    YOUNG,
+    M,
+    R,
+    V,
+    linear_for,
+    maw_k,
+    ode,
+    tsuji,
+)
 
 import dpm
 from dpm.impact.measure import collide
 
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
-#: the error runs bind every law in one step (compiled once); the cost runs do not
-NAMES = ["linear_spring_dashpot", "maw_linear_spring", "hooke", "hertz_brilliantov",
-         "hertz_mindlin", "walton_braun", "linear_cohesion"]
-
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
-
-R, RHO, YOUNG, NU, V = 1e-3, 2500.0, 1e7, 0.3, 0.5
-ESTAR = YOUNG / (2.0 * (1.0 - NU**2))
-M = 4.0 / 3.0 * math.pi * R**3 * RHO
-KH = 4.0 / 3.0 * ESTAR * math.sqrt(R)  # Hertz constant
-
-# -------------------------------------------------------------------------- references
-
-
-def linear_cutoff(k: float, c: float) -> dict:
-    """m d'' = -max(0, k d + c d'), d(0) = 0, d'(0) = V: exact (thesis eq. 2.25, true peak)."""
-    b = c / (2 * M)
-    w = math.sqrt(k / M - b * b)
-    T = (math.pi + math.atan(c * 2 * w * M / (c * c - 2 * M * k))) / w
-    tm = math.atan2(w, b) / w
-    dd = V * math.exp(-b * T) * (math.cos(w * T) - b / w * math.sin(w * T))
-    return {"duration": T, "max_overlap": V / w * math.exp(-b * tm) * math.sin(w * tm),
-            "restitution": -dd / V}
-
-
-def linear_for(k: float, e: float) -> dict:
-    cc = 2 * math.sqrt(k * M)
-    c = brentq(lambda c: linear_cutoff(k, c)["restitution"] - e, 1e-9 * cc, 0.999 * cc,
-               xtol=1e-16 * cc) if e < 1 else 0.0
-    return linear_cutoff(k, c)
-
-
-def ode(force, release: bool = True) -> dict:
-    """solve_ivp of m d'' = -F(d, d') until d = 0 or (release) F = 0 while separating."""
-    t_s = (M * M / (KH * KH * V)) ** 0.2
-
-    def rhs(t, y):
-        return [y[1], -force(max(y[0], 0.0), y[1]) / M]
-
-    def out(t, y):
-        return y[0]
-
-    def rel(t, y):
-        return force(max(y[0], 0.0), y[1]) if (y[1] < 0 and release) else 1.0
-
-    def peak(t, y):
-        return y[1]
-
-    out.terminal = rel.terminal = True
-    out.direction = rel.direction = peak.direction = -1
-    s = solve_ivp(rhs, (0, 50 * t_s), [0.0, V], method="DOP853", events=(out, rel, peak),
-                  rtol=1e-11, atol=1e-16, max_step=t_s / 50)
-    k = 0 if len(s.t_events[0]) else 1
-    return {"duration": float(s.t_events[k][0]), "max_overlap": float(s.y_events[2][0][0]),
-            "restitution": -float(s.y_events[k][0][1]) / V}
-
-
-def tsuji(beta: float):
-    def f(d, dd):
-        sn = 2 * ESTAR * math.sqrt(R * d)
-        return max(4 / 3 * ESTAR * math.sqrt(R * d) * d
-                   + 2 * math.sqrt(5 / 6) * beta * math.sqrt(sn * M) * dd, 0.0)
-    return f
-
-
-def maw_k(v: float) -> float:
-    return 16 / 15 * math.sqrt(R) * ESTAR * (15 * M * v * v / (16 * math.sqrt(R) * ESTAR)) ** 0.2
 
 
 def cases() -> list[dict]:
@@ -276,8 +221,7 @@ def plot(result: dict, path: Path) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="fewer step counts, small lattice")
+    ap = harness.parser(__doc__, "fewer step counts, small lattice")
     args = ap.parse_args(argv)
     ns = [10, 50, 200] if args.quick else [10, 20, 50, 100, 200, 500, 1000]
     side, steps = (10, 40) if args.quick else (20, 60)
@@ -292,13 +236,9 @@ def main(argv=None) -> int:
     result = {"scene": {"radius_m": R, "density": RHO, "young_Pa": YOUNG, "poisson": NU,
                         "impact_speed_m_s": V, "geometry": "sphere on a wall, head-on",
                         "integrator": "velocity_verlet", "lattice": side**3},
-              "machine": {"python": platform.python_version(), "cpu": platform.processor()
-                          or platform.machine()},
               "models": models}
-    RESULTS.mkdir(exist_ok=True)
-    stem = "impact_models_quick" if args.quick else "impact_models"
-    (RESULTS / f"{stem}.json").write_text(json.dumps(result, indent=1))
-    plot(result, RESULTS / f"{stem}.png")
+    path = harness.write("impact_models", result, args.quick)
+    harness.png(plot, result, path=path.with_suffix(".png"))
     # the table a user reads to pick a model
     pick = [n for n in (20, 50, 200) if n in ns] or ns
     head = " | ".join(f"{k} @{n}" for n in pick for k in ("T", "dmax", "e"))
@@ -310,7 +250,7 @@ def main(argv=None) -> int:
                            for k in ("duration_err", "max_overlap_err", "restitution_err"))
         print(f"| {m['label']} | {cells} | {m['kernel_ns_per_call']:.1f} | "
               f"{m['engine_ns_per_contact_step']:.1f} |")
-    print(f"\nwrote {RESULTS / (stem + '.json')} and .png")
+    print(f"\nwrote {path} and .png")
     return 0
 
 

@@ -32,7 +32,6 @@ etc.); writes benchmarks/results/integrators[_quick].json and .png.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
@@ -40,6 +39,7 @@ import sys
 import time
 from pathlib import Path
 
+import harness
 import numpy as np
 
 import dpm
@@ -628,8 +628,7 @@ def plot(res: dict, path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true")
+    ap = harness.parser(__doc__, "fewer step sizes and phases, smaller hopper")
     ap.add_argument("--only", nargs="*", default=None,
                     choices=["collision", "sandwich", "detection", "hopper"])
     args = ap.parse_args(argv)
@@ -645,8 +644,9 @@ def main(argv: list[str] | None = None) -> int:
         t = time.perf_counter()
         res[s] = fns[s](args.quick)
         res[s + "_wall_s"] = time.perf_counter() - t
-        jpath.write_text(json.dumps(res, indent=1, default=float))
-    plot(res, out_dir / f"{stem}.png")
+        res.pop("run", None)
+        jpath = harness.write("integrators", res, args.quick, default=float)
+    harness.png(plot, res, path=out_dir / f"{stem}.png")
     print(f"wrote {jpath} and {stem}.png")
     return 0
 

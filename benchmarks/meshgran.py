@@ -31,7 +31,6 @@ Writes benchmarks/results/meshgran[_quick].json and .png.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import re
@@ -58,23 +57,8 @@ CONTAINER = (0.15, 0.45, -0.1, 0.1, -0.6, -0.3)
 #: count interval [s] (thermo)
 EVERY = 0.02
 
-def _header() -> str:
-    """The lines every LIGGGHTS input of these benchmarks starts with (granular atoms,
-    SI units, a fixed box): those of hopper_discharge.py, up to its ``read_data``."""
-    text = (HERE / "hopper_discharge.py").read_text()
-    start = text.index('LIGGGHTS_IN = """\\\n') + len('LIGGGHTS_IN = """\\\n')
-    return text[start:text.index("read_data", start)]
-
-
-LIGGGHTS_IN = _header() + """\
-region reg block -0.1 0.5 -0.12 0.12 -0.62 0.05 units box
-create_box 1 reg
-neighbor {skin} bin
-neigh_modify delay 0
-fix m1 all property/global youngsModulus peratomtype {young}
-fix m2 all property/global poissonsRatio peratomtype {poisson}
-fix m3 all property/global coefficientRestitution peratomtypepair 1 {restitution}
-fix m4 all property/global coefficientFriction peratomtypepair 1 {friction}
+#: the input after shared_scenes' header and box lines (:func:`liggghts_input`)
+LIGGGHTS_REST = """\
 fix m5 all property/global characteristicVelocity scalar {char_vel}
 pair_style gran model hooke tangential history
 pair_coeff * *
@@ -193,6 +177,15 @@ def run_dpm(t_insert: float, t_end: float, threads: int = 1) -> dict:
             "skin": sim.skin, "threads": threads}
 
 
+def liggghts_input() -> str:
+    """The LIGGGHTS input, a template of ``str.format`` (imported here, not at the top:
+    tests/ load this file by path, without benchmarks/ on ``sys.path``)."""
+    from shared_scenes import LIGGGHTS_BOX_MATERIALS, LIGGGHTS_HEADER
+
+    box = LIGGGHTS_BOX_MATERIALS.format(region="-0.1 0.5 -0.12 0.12 -0.62 0.05")
+    return LIGGGHTS_HEADER + box + LIGGGHTS_REST
+
+
 def run_liggghts(t_insert: float, t_end: float, skin: float, seed: int) -> dict | None:
     exe = shutil.which("liggghts")
     if exe is None:
@@ -203,7 +196,7 @@ def run_liggghts(t_insert: float, t_end: float, skin: float, seed: int) -> dict 
     with tempfile.TemporaryDirectory() as tmp:
         t = Path(tmp)
         geometry(t)
-        (t / "in.meshgran").write_text(LIGGGHTS_IN.format(
+        (t / "in.meshgran").write_text(liggghts_input().format(
             skin=skin, young=YOUNG, poisson=POISSON, restitution=RESTITUTION,
             friction=FRICTION, char_vel=CHAR_VEL, dt=DT, density=DENSITY, radius=RADIUS,
             seed=seed, n_total=int(RATE * t_insert), rate=RATE, speed=SPEED,
@@ -247,9 +240,6 @@ def compare(d: dict, runs: list[dict]) -> dict:
 
 
 def plot(result: dict, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
@@ -271,8 +261,9 @@ def plot(result: dict, path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> dict:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--quick", action="store_true", help="insert 0.2 s, run to 0.8 s")
+    import harness  # (here: tests/ load this file by path)
+
+    p = harness.parser(__doc__, "insert 0.2 s, run to 0.8 s")
     p.add_argument("--no-liggghts", action="store_true")
     a = p.parse_args(argv)
     t_insert, t_end = (0.2, 0.8) if a.quick else (0.5, 2.5)
@@ -297,8 +288,9 @@ def main(argv: list[str] | None = None) -> dict:
     if runs:
         result["physics"] = compare(d, runs)
         lg = float(np.mean([r["particle_steps_per_s"] for r in runs]))
-        result["speed_ratio_dpm_over_liggghts"] = d["particle_steps_per_s"] / lg
-        result["speed_ratio_dpm_2_threads_over_liggghts"] = d2["particle_steps_per_s"] / lg
+        result["speed_ratio_dpm_over_liggghts"] = harness.ratio(d["particle_steps_per_s"], lg)
+        result["speed_ratio_dpm_2_threads_over_liggghts"] = harness.ratio(
+            d2["particle_steps_per_s"], lg)
         for r in runs:
             print(f"LIGGGHTS seed {r['seed']}: {r['inserted'][-1]} inserted, "
                   f"{r['in_container'][-1]} in the container, "
@@ -307,10 +299,8 @@ def main(argv: list[str] | None = None) -> dict:
         print(f"speed ratio dpm / LIGGGHTS {result['speed_ratio_dpm_over_liggghts']:.2f}, "
               f"dpm 2 threads / LIGGGHTS one core "
               f"{result['speed_ratio_dpm_2_threads_over_liggghts']:.2f}")
-    RESULTS.mkdir(exist_ok=True)
-    stem = "meshgran_quick" if a.quick else "meshgran"
-    (RESULTS / f"{stem}.json").write_text(json.dumps(result, indent=1))
-    plot(result, RESULTS / f"{stem}.png")
+    path = harness.write("meshgran", result, a.quick)
+    harness.png(plot, result, path=path.with_suffix(".png"))
     return result
 
 

@@ -30,9 +30,10 @@ Per step, on each of P ranks holding n = N / P particles (box_settle-like packin
 c, o, mu, sigma and r are the measured 2-rank figures of this machine; g's constant is
 the measured slab ghost layer turned into a cube's six faces; alpha, beta are those of a
 typical InfiniBand cluster (2 us, 10 GB/s) and alpha_r = 2 us. Writes
-``results/mpi_model.json``.
+``results/mpi_model[_quick].json``.
 
-    python benchmarks/mpi_model.py [--scaling results/mpi_scaling.json] [--frame-every 1000]
+    python benchmarks/mpi_model.py [--quick] [--scaling results/mpi_scaling.json]
+                                   [--frame-every 1000]
 
 Calibrations on runs written before calls ended without a gather (no ``gathers`` in the
 JSON's rank rows) count one gather per call, as those runs did.
@@ -40,10 +41,11 @@ JSON's rank rows) count one gather per call, as those runs did.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 from pathlib import Path
+
+import harness
 
 from dpm.kernels.halo import HALO_WIDTH as FLOATS_PER_GHOST
 
@@ -102,12 +104,17 @@ def step_time(cal: dict, N: float, P: int, frame_every: float) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--scaling", default=str(HERE / "results" / "mpi_scaling.json"))
+    ap = harness.parser(__doc__, "calibrate on results/mpi_scaling_quick.json when there "
+                                 "is one; write mpi_model_quick.json")
+    ap.add_argument("--scaling", default=None, help="(results/mpi_scaling.json)")
     ap.add_argument("--frame-every", type=float, default=1000.0,
                     help="steps between output frames (each gathers the whole state)")
-    ap.add_argument("--out", default=str(HERE / "results" / "mpi_model.json"))
+    ap.add_argument("--out", default=None, help="(results/mpi_model[_quick].json)")
     a = ap.parse_args()
+    if a.scaling is None:
+        quick = harness.RESULTS / "mpi_scaling_quick.json"
+        a.scaling = str(quick if a.quick and quick.exists()
+                        else harness.RESULTS / "mpi_scaling.json")
     cal = calibrate(json.loads(Path(a.scaling).read_text()))
     grid = [(N, P) for N in (1e6, 1e7, 1e8, 1e9) for P in (2, 64, 256, 1024)]
     rows = [step_time(cal, N, P, a.frame_every) for N, P in grid]
@@ -120,7 +127,10 @@ def main() -> None:
            "assumed": {"alpha_s": ALPHA, "beta_B_per_s": BETA,
                        "allreduce_alpha_s": ALPHA_R, "neighbours": NEIGHBOURS_3D},
            "prediction": rows, "prediction_no_frames": no_frames}
-    Path(a.out).write_text(json.dumps(out, indent=1))
+    if a.out:
+        Path(a.out).write_text(json.dumps(out | {"run": harness.machine()}, indent=1))
+    else:
+        harness.write("mpi_model", out, a.quick)
     print(json.dumps(cal, indent=1))
     print(f"{'N':>8} {'P':>5} {'n/rank':>9} {'ghosts':>7} {'eff':>6} {'loss':>8} "
           f"{'GB/rank':>8}   (no frames: eff, loss)")

@@ -14,10 +14,10 @@ walls, Hertz-Mindlin, dt = 1e-5 s) at several sizes, each run in the same sittin
 
 Strong scaling: the same scene on 1 and 2 ranks; weak scaling: about 10,000 spheres per
 rank (the lattice twice as tall on 2 ranks). Parallel efficiency = rate(R) / (R x
-rate(1)). Writes benchmarks/results/mpi_scaling.json and .png.
+rate(1)). Writes benchmarks/results/mpi_scaling[_quick].json and .png.
 
     python benchmarks/mpi_scaling.py                 # 1e4 and 1e5 spheres, 2000 steps
-    python benchmarks/mpi_scaling.py --sizes 10000 --steps 1000      # quicker
+    python benchmarks/mpi_scaling.py --quick         # 1e4 spheres, 500 steps
     python benchmarks/mpi_scaling.py --oversubscribe 4               # + a 4-rank run
     python benchmarks/mpi_scaling.py --rounds 3     # each configuration 3 times in turn
 
@@ -36,7 +36,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import re
 import shutil
 import statistics
@@ -46,12 +45,12 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
+import harness
+from shared_scenes import settled_packing
 
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
 RESULTS = HERE / "results"
 SCENE = HERE / "scenes" / "box_settle"
 LATTICES = {10000: (20, 20, 25), 100000: (40, 40, 63), 20000: (20, 20, 50),
@@ -64,60 +63,13 @@ def _mpiexec() -> str:
     return str(beside) if beside.exists() else (shutil.which("mpiexec") or "mpiexec")
 
 
-def settled_packing(lat: tuple[int, int, int], settle: int, threads: int = 2) -> Path:
-    """The box_settle lattice ``lat`` after ``settle`` steps of dpm (``threads`` threads,
-    one process), written once (then reused) beside the lattice's own files in gen_init.py's
-    two formats: ``box_settle_NXxNYxNZ_settledS.csv`` (x,y,z,vx,vy,vz,r, the same box) and
-    ``.data`` (LIGGGHTS). Positions and velocities only: both codes start from the same
-    bed with no spin and no contact history (what a data file can carry)."""
-    from box_settle import _example
-
-    tag = f"box_settle_{lat[0]}x{lat[1]}x{lat[2]}_settled{settle}"
-    csv = SCENE / f"{tag}.csv"
-    if csv.exists():
-        return csv
-    ex = _example()
-    start = ex.initial_packing(*lat)
-    with open(start) as f:
-        header = f.readline().strip()
-    box = [float(x) for x in header.split("box=")[1].split(",")]
-    sim = ex.build(start)
-    sim.threads = threads
-    sim.run(steps=settle, progress=False)
-    b = sim.bodies
-    by_id = np.argsort(b.id, kind="stable")
-    pos, vel = b.position[by_id], b.velocity[by_id]
-    r = sim.elements.radius[b.element_start[:-1]][by_id]
-    rho = b.mass[by_id] / (4.0 / 3.0 * np.pi * r ** 3)
-    n = len(pos)
-    with tempfile.TemporaryDirectory(dir=SCENE) as tmpd:  # (renamed into place, CSV last)
-        data = Path(tmpd) / "x.data"
-        with open(data, "w") as f:
-            f.write(f"box settle {n}, settled {settle} steps\n\n{n} atoms\n1 atom types\n\n")
-            f.write(f"0 {box[0]} xlo xhi\n0 {box[1]} ylo yhi\n0 {box[2]} zlo zhi\n\n")
-            f.write("Atoms\n\n")
-            for a in range(n):
-                f.write(f"{a + 1} 1 {2 * r[a]:.17g} {rho[a]:.17g} {pos[a, 0]:.17g} "
-                        f"{pos[a, 1]:.17g} {pos[a, 2]:.17g}\n")
-            f.write("\nVelocities\n\n")
-            for a in range(n):
-                f.write(f"{a + 1} {vel[a, 0]:.17g} {vel[a, 1]:.17g} {vel[a, 2]:.17g} 0 0 0\n")
-        np.savetxt(Path(tmpd) / "x.csv", np.column_stack([pos, vel, r]), delimiter=",",
-                   header=header.lstrip("# "), comments="", fmt="%.17g")
-        os.replace(data, csv.with_suffix(".data"))
-        os.replace(Path(tmpd) / "x.csv", csv)
-    return csv
-
-
 def worker(lat: tuple[int, int, int], steps: int, out: str, threads: int,
            packing: str | None = None) -> None:
     """Run under mpiexec (or alone): the box_settle scene, timed after a warm-up; from
     ``packing`` (a CSV of :func:`settled_packing`) instead of the lattice if given."""
-    from box_settle import _example
-
     import dpm
 
-    ex = _example()
+    ex = harness.example("box_settle")
     csv = Path(packing) if packing else ex.initial_packing(*lat)
     sim = ex.build(csv)
     if packing:  # (a settled bed overlaps by a few % of a radius, as it did in the run)
@@ -297,14 +249,14 @@ def plot(result: dict, path: Path) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = harness.parser(__doc__, "10,000 spheres, 500 steps")
     ap.add_argument("--worker", nargs="+", default=None, help=argparse.SUPPRESS)
-    ap.add_argument("--sizes", type=int, nargs="+", default=[10000, 100000])
-    ap.add_argument("--steps", type=int, default=2000)
+    ap.add_argument("--sizes", type=int, nargs="+", default=None, help="(10000 100000)")
+    ap.add_argument("--steps", type=int, default=None, help="(2000)")
     ap.add_argument("--oversubscribe", type=int, default=0, metavar="R",
                     help="also a correctness run on R ranks (more than the cores)")
     ap.add_argument("--no-liggghts", action="store_true")
-    ap.add_argument("--tag", default="mpi_scaling")
+    ap.add_argument("--tag", default=None, help="results/<tag>.json (mpi_scaling[_quick])")
     ap.add_argument("--rounds", type=int, default=1,
                     help="run every configuration this many times in turn; each ratio is "
                     "the median of the rounds' (the records kept are the last round's)")
@@ -318,6 +270,8 @@ def main() -> None:
         worker(lat, int(a.worker[3]), a.worker[4], int(a.worker[5]),
                a.worker[6] if len(a.worker) > 6 else None)
         return
+    a.sizes = a.sizes or ([10000] if a.quick else [10000, 100000])
+    a.steps = a.steps or (500 if a.quick else 2000)
     strong, weak = [], []
     with tempfile.TemporaryDirectory() as tmpd:
         tmp = Path(tmpd)
@@ -359,13 +313,11 @@ def main() -> None:
             lat = LATTICES[a.sizes[0]]
             over = run_dpm(lat, min(a.steps, 500), a.oversubscribe, 1, tmp, True,
                            settled_packing(lat, a.settle) if a.settle else None)
-    result = {"scene": "box_settle", "machine": platform.processor() or platform.machine(),
-              "cores": os.cpu_count(), "strong": strong, "weak": weak,
+    result = {"scene": "box_settle", "strong": strong, "weak": weak,
               "oversubscribed_correctness_run": over}
-    RESULTS.mkdir(exist_ok=True)
-    (RESULTS / f"{a.tag}.json").write_text(json.dumps(result, indent=1))
-    plot(result, RESULTS / f"{a.tag}.png")
-    print(f"wrote {RESULTS / (a.tag + '.json')} and .png")
+    path = harness.write("mpi_scaling", result, a.quick, a.tag)
+    harness.png(plot, result, path=path.with_suffix(".png"))
+    print(f"wrote {path} and .png")
 
 
 if __name__ == "__main__":

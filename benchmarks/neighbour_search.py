@@ -10,7 +10,7 @@ rebuild is timed on 1 and 2 threads (the median of ``--reps``), after two untime
 (the compile, and a list whose slots are sized by the previous one, as in a run).
 
 With ``--settled NXxNYxNZ`` it also times box_settle's bed of that lattice after 20,000
-steps (``mpi_scaling.settled_packing``, built once if missing): ``settled`` rebuilds from
+steps (``shared_scenes.settled_packing``, built once if missing): ``settled`` rebuilds from
 its own list, ``settled_migrated`` from a list that holds only the touching pairs, as an
 MPI rank's list after a migration (which carries only the touching entries): the slots
 sized by that list are too small for a few elements in a hundred.
@@ -26,7 +26,7 @@ turn, and each figure's ratio B/A (above 1: A faster) is the median over the rou
 call; separate processes meet different memory placements and moments of a shared machine,
 which on small packings can differ by more than a change's effect.)
 
-Writes benchmarks/results/neighbour_search[_TAG].json.
+Writes benchmarks/results/neighbour_search[_quick | _TAG].json (``--quick``: k = 10, 5 rebuilds).
 """
 
 from __future__ import annotations
@@ -40,6 +40,7 @@ import sys
 import time
 from pathlib import Path
 
+import harness
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
@@ -170,8 +171,7 @@ def worker(k: int, reps: int, settled: str | None = None, other: str | None = No
            ) -> list[dict]:
     """Rebuild times [us] of this process's dpm (and of ``other``'s rebuild, alternated in
     this process), each {order: {threads: us, "pairs": n}}."""
-    sys.path.insert(0, str(HERE))
-    from scaling import D, scene_arrays
+    from shared_scenes import D, scene_arrays
 
     import dpm
 
@@ -203,9 +203,9 @@ def run_tree(tree: Path, k: int, reps: int, settled: Path | None,
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--k", type=int, default=16, help="lattice edge (k^3 spheres)")
-    p.add_argument("--reps", type=int, default=40)
+    p = harness.parser(__doc__, "a 10^3 lattice, 5 rebuilds a figure")
+    p.add_argument("--k", type=int, default=None, help="lattice edge (k^3 spheres; 16)")
+    p.add_argument("--reps", type=int, default=None, help="rebuilds a figure (40)")
     p.add_argument("--trees", nargs=2, type=Path, metavar=("A", "B"))
     p.add_argument("--rounds", type=int, default=3)
     p.add_argument("--tag", default="")
@@ -219,14 +219,15 @@ def main() -> None:
     p.add_argument("--other", default=None, help=argparse.SUPPRESS)
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     a = p.parse_args()
+    a.k = a.k or (10 if a.quick else 16)
+    a.reps = a.reps or (5 if a.quick else 40)
     if a.worker:
         print(json.dumps(worker(a.k, a.reps, a.settled, a.other)))
         return
     settled = None
     orders = ORDERS
     if a.settled:
-        sys.path.insert(0, str(HERE))
-        from mpi_scaling import settled_packing
+        from shared_scenes import settled_packing
 
         lat = tuple(int(x) for x in a.settled.split("x"))
         settled = settled_packing(lat, 20000)
@@ -252,8 +253,8 @@ def main() -> None:
         for o in orders:
             q = result["ratio_b_over_a"][o]
             print(f"{o}: B/A 1 thread {q['1']:.2f}, 2 threads {q['2']:.2f}")
-    name = "neighbour_search" + (f"_{a.tag}" if a.tag else "") + ".json"
-    (HERE / "results" / name).write_text(json.dumps(result, indent=1) + "\n")
+    harness.write("neighbour_search", result, a.quick,
+                  tag=f"neighbour_search_{a.tag}" if a.tag else None)
 
 
 if __name__ == "__main__":

@@ -23,14 +23,14 @@ the JSONs already there (no runs); ``--only NAME`` runs a subset (repeatable).
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
-import platform
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+import harness
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
@@ -138,8 +138,7 @@ def plot(rows: list[dict], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--quick", action="store_true")
+    ap = harness.parser(__doc__, "each scene script's --quick")
     ap.add_argument("--collect", action="store_true", help="only read the JSONs there")
     ap.add_argument("--only", action="append", choices=list(SCENES), default=None)
     args = ap.parse_args(argv)
@@ -171,13 +170,11 @@ def main(argv: list[str] | None = None) -> int:
             if not isinstance(r[k], int | float):
                 r[k] = None
     load = os.getloadavg() if hasattr(os, "getloadavg") else None
-    out = {"machine": platform.machine(), "cores": os.cpu_count(), "quick": args.quick,
-           "collected_only": args.collect, "load_average_at_end": load,
+    out = {"quick": args.quick, "collected_only": args.collect, "load_average_at_end": load,
            "script_wall_s": walls, "rows": rows}
-    stem = "peers_quick" if args.quick else "peers"
-    (RESULTS / f"{stem}.json").write_text(json.dumps(out, indent=1) + "\n")
+    path = harness.write("peers", out, args.quick)
     if rows:
-        plot(rows, RESULTS / f"{stem}.png")
+        harness.png(plot, rows, path=path.with_suffix(".png"))
     for r in rows:
         r1 = f"{r['ratio_1']:.2f}" if r["ratio_1"] else "-"
         r2 = f"{r['ratio_2']:.2f}" if r["ratio_2"] else "-"

@@ -4,20 +4,21 @@ Builds the dilute or dense box of benchmarks/scaling.py (k^3 spheres), runs 50 s
 times (microseconds per step) the whole step and its parts: ``begin`` (integrator pre-force
 part and element displacements), ``contact`` (contact pass of the two-pass form), ``sum``
 (its per-body sums and integrator post-force part), and one neighbour-list ``rebuild``.
-The whole step is the scene's own (the fused pass: every body is a sphere). The figures in
-benchmarks/NOTES.md come from this script.
+The whole step is the scene's own (the fused pass: every body is a sphere). Writes
+benchmarks/results/profile_step[_quick].json.
 
     python benchmarks/profile_step.py 22 dense
+    python benchmarks/profile_step.py --quick     # 10^3 spheres
 """
 
 from __future__ import annotations
 
-import argparse
 import os
 import time
 
+import harness
 import numba
-from scaling import CASES, D, scene_arrays  # noqa: I001  (run from benchmarks/)
+from shared_scenes import CASES, D, scene_arrays
 
 import dpm
 from dpm.backends.records import PairList
@@ -34,10 +35,12 @@ def timed(fn, reps: int) -> float:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("k", type=int, nargs="?", default=22, help="lattice edge (k^3 spheres)")
+    p = harness.parser(__doc__, "a 10^3 lattice")
+    p.add_argument("k", type=int, nargs="?", default=None,
+                   help="lattice edge (k^3 spheres; 22)")
     p.add_argument("case", nargs="?", default="dense", choices=list(CASES))
     a = p.parse_args()
+    a.k = a.k or (10 if a.quick else 22)
     numba.set_num_threads(1)
     pos, vel, box = scene_arrays(a.k, a.case)
     sim = dpm.Simulation(dt=1e-5, gravity=(0, 0, CASES[a.case][2]), threads=1)
@@ -64,6 +67,11 @@ def main() -> None:
     print(f"{a.case} box, {n} spheres, {c.count} listed pairs, {sim.contact_count()} touching; "
           f"us per step: step {step:.0f} | begin {begin:.0f} ({begin / n * 1e3:.0f} ns per "
           f"body) | contact {contact:.0f} | sum {summed:.0f} | one rebuild {rebuild:.0f}")
+    harness.write("profile_step", {
+        "case": a.case, "k": a.k, "spheres": n, "listed_pairs": int(c.count),
+        "touching": int(sim.contact_count()), "threads": 1,
+        "us_per_step": {"step": step, "begin": begin, "contact": contact, "sum": summed,
+                        "one_rebuild": rebuild}}, a.quick)
 
 
 if __name__ == "__main__":

@@ -10,12 +10,11 @@ Scenes (the box-settle material and walls, Hertz-Mindlin, dt = 1e-5 s):
     python benchmarks/scaling.py                # 1e3 .. 1e6
     python benchmarks/scaling.py --quick        # 1e3 .. 1e5, fewer steps
 
-Writes benchmarks/results/scaling.json and scaling.png.
+Writes benchmarks/results/scaling[_quick].json (``{"rows": [...], "run": ...}``) and .png.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import re
@@ -27,26 +26,14 @@ import tempfile
 import time
 from pathlib import Path
 
+import harness
 import numpy as np
+from shared_scenes import CASES, RHO, D, scene_arrays
 
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
-D, RHO = 0.002, 2500.0
-CASES = {"dilute": (0.0021, 0.05, 0.0), "dense": (0.999 * D, 0.0, -9.81)}
-
-
-def scene_arrays(k: int, case: str):
-    spacing, vscale, _ = CASES[case]
-    rng = np.random.default_rng(7)
-    i, j, m = np.meshgrid(np.arange(k), np.arange(k), np.arange(k), indexing="ij")
-    pos = (np.stack([i, j, m], -1).reshape(-1, 3) + 0.5) * spacing
-    if case == "dense":
-        pos[:, 2] += (D / 2 - 0.5 * spacing) * 0.999
-    vel = rng.uniform(-vscale, vscale, pos.shape)
-    box = np.array([k * spacing, k * spacing, (k + 4) * spacing])
-    return pos, vel, box
 
 
 def worker(k: int, case: str, threads: int, steps: int) -> dict:
@@ -144,8 +131,7 @@ def plot(rows, path):
 
 
 def main():
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--quick", action="store_true")
+    p = harness.parser(__doc__, "1e3 .. 1e5 spheres, fewer steps")
     p.add_argument("--worker", nargs=4, metavar=("K", "CASE", "THREADS", "STEPS"))
     p.add_argument("--sizes", type=int, nargs="+", default=None, help="lattice edge counts")
     p.add_argument("--no-liggghts", action="store_true")
@@ -171,10 +157,8 @@ def main():
                 if r:
                     rows.append(r)
                     print(json.dumps(r), flush=True)
-    RESULTS.mkdir(exist_ok=True)
-    tag = "scaling_quick" if a.quick else "scaling"
-    (RESULTS / f"{tag}.json").write_text(json.dumps(rows, indent=1))
-    plot(rows, RESULTS / f"{tag}.png")
+    path = harness.write("scaling", rows, a.quick)  # {"rows": rows, "run": ...}
+    harness.png(plot, rows, path=path.with_suffix(".png"))
 
 
 if __name__ == "__main__":

@@ -20,13 +20,12 @@ shapes_speed_vs_error_quick.*) and prints the table.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
-import platform
 import time
 from pathlib import Path
 
+import harness
 import numpy as np
 
 import dpm
@@ -134,8 +133,7 @@ def plot(rows: list[dict], path: Path) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true")
+    ap = harness.parser(__doc__, "3 resolutions, 100 steps")
     ap.add_argument("--plot-only", action="store_true", help="redraw the PNG from the JSON")
     args = ap.parse_args()
     if args.plot_only:
@@ -157,13 +155,9 @@ def main() -> None:
                   f"dt_crit={row['dt_critical']:.3g} s "
                   + (f"cost={1e6 * cost:.2f} us/body-step" if cost is not None
                      else f"engine: {row['engine_error']}"), flush=True)
-    suffix = "_quick" if args.quick else ""
-    RESULTS.mkdir(exist_ok=True)
-    out = {"machine": platform.platform(), "processor": platform.processor(),
-           "material": MATERIAL, "steps": steps, "rows": rows}
-    jpath = RESULTS / f"shapes_speed_vs_error{suffix}.json"
-    jpath.write_text(json.dumps(out, indent=1) + "\n")
-    plot(rows, RESULTS / f"shapes_speed_vs_error{suffix}.png")
+    out = {"material": MATERIAL, "steps": steps, "rows": rows}
+    jpath = harness.write("shapes_speed_vs_error", out, args.quick)
+    harness.png(plot, rows, path=jpath.with_suffix(".png"))
     print(f"wrote {jpath} and .png")
 
 
