@@ -38,6 +38,7 @@ from .errors import ParameterError
 from .flow import Inlet, Outlet
 from .guards import EnergyBook, Escaped, Guards
 from .impact.base import ImpactModel, PairContext
+from .impact.design_speed import design_speed_warnings, overlap_hint
 from .impact.parts import contact_reach, pack_tables
 from .material import Material
 from .measures import to_body as _to_body  # noqa: F401  (used by tests and scripts)
@@ -720,7 +721,9 @@ class Simulation:
             raise ParameterError("Simulation(): time step too large:\n  " + "\n  ".join(refuse)
                                  + "\n  (pass dt_check='warn' to run anyway)")
         if self.dt_check != "off":
-            for w in (refuse + warn):
+            # (a law's design speed against the scene's falls: once per checked step)
+            speeds = [] if self._dt_checked else design_speed_warnings(self)
+            for w in (refuse + warn + speeds):
                 warnings.warn(w, stacklevel=4)
         self._dt_checked = True
         return report
@@ -1053,7 +1056,8 @@ class Simulation:
         if res.status == STATUS_OVERLAP:
             self._fail(f"an overlap reached {res.worst_overlap:.3g} of the radius "
                        f"(max_overlap={self.max_overlap:g})"
-                       f"{diagnosis.locate(self, res.worst_element)}")
+                       f"{diagnosis.locate(self, res.worst_element)}"
+                       f"{overlap_hint(self, res.worst_element, res.worst_overlap)}")
         t0 = _time.perf_counter()
         if self.speed_guard:
             diagnosis.check_speeds(self)
