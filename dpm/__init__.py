@@ -12,7 +12,7 @@ import numba as _numba
 
 if "NUMBA_THREADING_LAYER" not in _os.environ:
     # OpenMP first: on a 2-core machine it scales the step 1.8x on two threads, where TBB
-    # gave no gain and the workqueue a loss (benchmarks/NOTES.md). NUMBA_THREADING_LAYER
+    # gave no gain and the workqueue a loss. NUMBA_THREADING_LAYER
     # set by the user wins.
     _numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
 

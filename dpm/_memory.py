@@ -5,9 +5,9 @@ such a block is freed it raises that threshold to the block's size (up to 32 MB)
 many temporaries of a scene's set-up and a neighbour-list rebuild (a few to a few tens
 of MB each at 1e6 spheres) then come from the heap, where freed pages stay resident
 wherever a live block sits above them. At 1e6 spheres that kept about 200 MB resident
-after ``add_particles`` and raised the peak of the first rebuild by as much
-(``benchmarks/NOTES.md`` row 23). A fixed threshold of 1 MB (``mallopt``; setting it turns
-the adjustment off) gives every large array its own mapping, returned on free.
+after ``add_particles`` and raised the peak of the first rebuild by as much. A fixed
+threshold of 1 MB (``mallopt``; setting it turns the adjustment off) gives every large
+array its own mapping, returned on free.
 
 The cost is a fresh mapping, and its page faults, for each large allocation: the step
 loop allocates only in a rebuild (its scratch), a few ms per rebuild at 1e6 spheres.
@@ -41,7 +41,7 @@ def tune_malloc() -> bool:
 #: bytes of state per body (position, velocity, orientation, forces, mass properties, ids,
 #: its share of the neighbour and contact lists) and per sphere element (offset, radius,
 #: owner, cell index, neighbour list rows); together 700 B per single-sphere body, the
-#: measured peak at 1e6 dense spheres being 631 B (``benchmarks/NOTES.md`` rows 23 and 25)
+#: measured peak at 1e6 dense spheres being 631 B
 BYTES_PER_BODY = 450
 BYTES_PER_ELEMENT = 250
 

@@ -90,7 +90,7 @@ def _kind_alias(k: int) -> str:
 #: one compiled ``closest_call``. numba inlines at the level of its IR and types each copy
 #: anew, so the copies of a many-kind dispatch made most of a module's compile: a box
 #: scene with far boundaries of the six built-in kinds reached its first steps from an
-#: empty cache in 206 s, 91 s with the calls (benchmarks/NOTES.md row 75). The price is a
+#: empty cache in 206 s, 91 s with the calls. The price is a
 #: call per search candidate in scenes of 3+ kinds (their search pass 1.0-1.3x slower).
 INLINE_SEARCH_KINDS = 2
 
@@ -334,7 +334,7 @@ def _splice(template: str, lines: list[str]) -> str:
 
 #: kernel files that every step module calls but that do not depend on the scene (the
 #: neighbour-list build: four parallel loops, ~21 s of a scene's ~85 s cold compile on 2
-#: cores, benchmarks/NOTES.md row 52). The step modules import them from a generated copy
+#: cores). The step modules import them from a generated copy
 #: compiled with numba's cache on, named like a step module by every kernel source, so
 #: they compile once per machine instead of once per scene kind. (The library files
 #: themselves stay uncached: numba's cache of a function does not notice a change in a
@@ -392,7 +392,7 @@ def one_thread_form(src: str) -> str:
     plain ``range`` loop, the functions still compiled with ``parallel=True``.
 
     A ``prange`` loop launches a parallel region even on one thread (~0.9 us each, three
-    per step: most of a tiny scene's step, benchmarks/NOTES.md rows 40 and 46), while
+    per step: most of a tiny scene's step; a 1-sphere step 4.78 -> 1.91 us), while
     the plain loop inside a ``parallel=True`` function is compiled as fast as the body of
     a parallel loop (as plain ``@jit`` functions the same loops ran 4-5x slower: the
     docstring of :func:`dpm.kernels.step.fused_pass`). Each loop's iterations

@@ -27,11 +27,7 @@ from .backends.base import (
     Backend,
     StepResult,
 )
-from .backends.cpu import (
-    SMALL_SCENE,  # noqa: F401  (public names)
-    default_threads,  # noqa: F401
-    threading_layer_advice,
-)
+from .backends.cpu import threading_layer_advice
 from .boundaries.base import Boundary
 from .boundaries.joints import join_pipe_ends
 from .errors import ParameterError
@@ -41,7 +37,6 @@ from .impact.base import ImpactModel, PairContext
 from .impact.design_speed import design_speed_warnings, overlap_hint
 from .impact.parts import contact_reach, pack_tables
 from .material import Material
-from .measures import to_body as _to_body  # noqa: F401  (used by tests and scripts)
 from .motion import frames
 from .parameters import Parameter, validate
 from .plugins import call_hook, registry
@@ -82,9 +77,9 @@ class Simulation:
         Default: ``$DPM_THREADS`` if set, else 1 (as LIGGGHTS and Yade run one core unless
         told otherwise: several runs side by side, or a shared machine, then do not
         oversubscribe the cores, which stalls parallel loops badly). Scenes under
-        ``SMALL_SCENE`` elements always run on one thread unless ``threads`` is given (there
-        starting parallel loops costs more than it gains). Results are identical for any
-        number of threads.
+        ``dpm.backends.cpu.SMALL_SCENE`` (4,000) elements always run on one thread unless
+        ``threads`` is given (there starting parallel loops costs more than it gains).
+        Results are identical for any number of threads.
     sphere_orientation : bool
         Track the orientation of single-sphere bodies (default True). No force depends on
         it; with False their quaternion is not updated (as LIGGGHTS' ``nve/sphere``) and
@@ -851,7 +846,7 @@ class Simulation:
                         if len(self.bodies) == 0:
                             return  # (the inlets start later than this run ends)
                 # the run's thread count before the backend loads its step module: the
-                # module's form follows it (dpm.backends.cpu.one_thread_form_now), and a
+                # module's form follows it (CpuBackend.sync_form), and a
                 # module loaded under another count would be compiled for nothing
                 numba.set_num_threads(self.backend.thread_count(len(self.elements)))
                 self._prepare()
@@ -1182,12 +1177,6 @@ class Simulation:
     def contact_count(self) -> int:
         """Touching contacts (particle pairs and particle-boundary) of the last step."""
         return self.backend.contact_count()
-
-    @property
-    def _diag(self) -> np.ndarray:
-        """The backend's kernel diagnostics (old name, read by scripts: [6] is
-        :meth:`contact_count`)."""
-        return self.backend.diag
 
 
 def _rows(call: str, name: str, value: Any, width: int, n: int | None = None) -> np.ndarray:

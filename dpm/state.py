@@ -347,7 +347,7 @@ IDENTITY_FRAME = np.array([0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0]
 
 #: a boundary of more primitives than this gets a search grid; fewer are tested one by
 #: one (a triangle's plane test rejects most in a few ns: on the meshGran port's 18 large
-#: triangles the plain loop takes 0.63-0.78 of the grid's time, benchmarks/meshgran_steps.py)
+#: triangles the plain loop takes 0.63-0.78 of the grid's time)
 GRID_FROM = 32
 
 

@@ -19,11 +19,13 @@ scene of built-in parts with the same results bit for bit, a little slower. With
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -131,14 +133,31 @@ def _load_module(module: ModuleType, what: str) -> ModuleType:
 
 
 def _announce(module: ModuleType, text: str) -> None:
-    """``text`` on standard error, once per module and process (not with $DPM_QUIET)."""
+    """``text`` on standard error, once per module and process (not inside
+    :func:`quiet`)."""
     if module.__name__ not in _ANNOUNCED and not _quiet():
         _ANNOUNCED.add(module.__name__)
         print(f"dpm: {text}", file=sys.stderr, flush=True)
 
 
+#: how many :func:`quiet` blocks are open in this process
+_QUIET_DEPTH = 0
+
+
+@contextlib.contextmanager
+def quiet() -> Iterator[None]:
+    """Hold back the compile messages and the threading-layer advice of the runs inside
+    the block (``dpm compile``'s own throwaway scenes); nothing outside it changes."""
+    global _QUIET_DEPTH
+    _QUIET_DEPTH += 1
+    try:
+        yield
+    finally:
+        _QUIET_DEPTH -= 1
+
+
 def _quiet() -> bool:
-    return os.environ.get("DPM_QUIET", "0") not in ("0", "")
+    return _QUIET_DEPTH > 0
 
 
 # ------------------------------------------------------------------ background compile
@@ -298,8 +317,8 @@ def compile_universal(integrator: str) -> float:
 
 
 def _compile_one(integrator: str) -> tuple[str, float]:
-    os.environ["DPM_QUIET"] = "1"
-    return integrator, compile_universal(integrator)
+    with quiet():
+        return integrator, compile_universal(integrator)
 
 
 def compile_builtins(integrators: list[str] | None = None, jobs: int = 1,

@@ -244,7 +244,7 @@ def main(argv: list[str] | None = None) -> dict:
         try:
             picture(doc, out / "drop_test.png")
         except ImportError:
-            print("matplotlib is missing: no picture (pip install 'dpm[plot]')")
+            print("matplotlib is missing: no picture (pip install 'dpm-granular[plot]')")
     dpm.notice(f"output in {out}/")
     return doc
 

@@ -407,7 +407,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
         try:
             picture(results, out / "rotary_kiln.png")
         except ImportError:
-            print("matplotlib is missing: no picture (pip install 'dpm[plot]')")
+            print("matplotlib is missing: no picture (pip install 'dpm-granular[plot]')")
     dpm.notice(f"{len(results)} speeds in {total:.0f} s; output in {out}/ (open the .xdmf files "
                f"in ParaView)")
     return results

@@ -408,11 +408,19 @@ def main(argv: list[str] | None = None) -> int:
                     help="record, on every rank, the rank each dpm_after_step hook was "
                     "given, the calls of it and of dpm_before_step (which asks no rank), "
                     "and the threads the steps ran on")
+    ap.add_argument("--python-loop", action="store_true",
+                    help="step between list rebuilds from Python (two compiled calls per "
+                    "step, messages by mpi4py), as on an MPI whose handles are not "
+                    "pointers: this process's MPI is reported unfit for compiled calls")
     ap.add_argument("--reductions", action="store_true",
                     help="at the end, the between-calls reductions of the ranks' rows "
                     "against the gathered host's")
     args = ap.parse_args(argv)
     OPTIONS["integrator"] = args.integrator
+    if args.python_loop:
+        from dpm.parallel import native
+
+        native.handles = lambda comm: (None, "the test driver's --python-loop")
     if args.restart:
         sim = dpm.restart(args.restart)
         steps = int(SCENES[args.scene](args.device)[1]) - sim.step_count \

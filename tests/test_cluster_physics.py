@@ -29,7 +29,7 @@ def test_torus_rests_in_a_corner_on_several_elements():
     weight = sim.bodies.mass[0] * G
     total = floor.force + wall.force
     np.testing.assert_allclose(total, [0, 0, -weight], atol=1e-2 * weight)
-    assert int(sim._diag[6]) >= 2  # leaning: elements touch the floor and the wall
+    assert int(sim.backend.diag[6]) >= 2  # leaning: elements touch the floor and the wall
     assert wall.force[0] < -1e-3 * weight  # the wall carries part of the load
     # it may still creep along the wall (a leaning ring can roll sideways), but slowly
     assert np.linalg.norm(sim.bodies.velocity[0]) < 1e-2
@@ -48,8 +48,8 @@ def test_torus_falls_flat_and_lies_on_its_ring():
     sim.run(until=0.2, progress=False)
     weight = sim.bodies.mass[0] * G
     np.testing.assert_allclose(floor.force, [0, 0, -weight], atol=1e-2 * weight)
-    assert int(sim._diag[6]) >= 3  # lies on several elements of its ring
-    axis = dpm.simulation._to_body(sim.bodies.orientation * [1, -1, -1, -1],
+    assert int(sim.backend.diag[6]) >= 3  # lies on several elements of its ring
+    axis = dpm.measures.to_body(sim.bodies.orientation * [1, -1, -1, -1],
                                    np.array([[0.0, 0.0, 1.0]]))[0]
     assert abs(axis[2]) > 0.999  # the ring's symmetry axis is vertical
 

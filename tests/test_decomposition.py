@@ -1,4 +1,4 @@
-"""The domain cut's pure parts (no MPI): the bisection and the fitted cost model."""
+"""The domain cut's pure parts (no MPI): the bisection, owners and ghost layers."""
 
 import numpy as np
 import pytest
@@ -16,60 +16,6 @@ def test_bisection_evens_the_weight_and_tiles_space():
         assert np.all(owner >= 0)  # every point in exactly one box
         per = np.bincount(owner, weights=w, minlength=ranks)
         assert dec.imbalance(per) < 1.02, per
-
-
-def _rank_times(e, t, x, scale, rng, noise):
-    return scale * (e + x * t) * (1.0 + noise * rng.standard_normal(len(e)))
-
-
-def test_fit_recovers_the_touching_weight_of_the_measured_times():
-    """Ranks of different composition (a dense bed and a dilute top): times made from a
-    known weight, each interval at its own speed, with 2 % noise."""
-    rng = np.random.default_rng(7)
-    for true in (0.3, 0.75, 2.0):
-        samples = []
-        for _ in range(12):
-            e = rng.uniform(40000, 60000, 2)
-            t = np.array([rng.uniform(30000, 50000), rng.uniform(5000, 15000)])
-            w = _rank_times(e, t, true, rng.uniform(50e-9, 100e-9), rng, 0.02)
-            samples.append((e, t, w, 100.0))
-        got = dec.fit_touching_weight(samples, prior=0.5)
-        assert got == pytest.approx(true, rel=0.25), (true, got)
-        # the fitted model predicts the measured ratio of the ranks' times
-        e, t, w, _ = samples[-1]
-        m = e + got * t
-        assert m[0] / m[1] == pytest.approx(w[0] / w[1], rel=0.05)
-
-
-def test_fit_keeps_the_prior_where_the_times_cannot_tell():
-    # ranks of the same composition: any weight fits, the balance does not depend on it
-    e = np.array([50000.0, 50000.0])
-    t = np.array([20000.0, 20000.0])
-    w = np.array([1.0, 1.0])
-    assert dec.fit_touching_weight([(e, t, w, 100.0)], prior=0.5) == pytest.approx(
-        0.5, rel=0.05)
-    assert dec.fit_touching_weight([], prior=0.5) == 0.5
-    # no contacts anywhere: the same
-    assert dec.fit_touching_weight([(e, np.zeros(2), np.array([1.0, 1.2]), 100.0)],
-                                   prior=0.5) == pytest.approx(0.5, rel=0.05)
-
-
-def test_fit_keeps_the_prior_against_scatter_the_compositions_do_not_explain():
-    """Two ranks, each interval alone fits some weight exactly; times scattered 5 % about
-    the prior's model (another job sharing a core now and then): the intervals disagree,
-    the best weight leaves most of the prior's residual, the prior stays. Without the
-    guard the same data pull the weight far off."""
-    rng = np.random.default_rng(3)
-    samples = []
-    for _ in range(16):
-        e = rng.uniform(45000, 55000, 2)
-        t = np.array([rng.uniform(30000, 35000), rng.uniform(20000, 25000)])
-        samples.append((e, t, _rank_times(e, t, 0.5, 80e-9, rng, 0.05), 100.0))
-    assert dec.fit_touching_weight(samples, prior=0.5) == 0.5
-    free = dec.fit_touching_weight(samples, prior=0.5, min_gain=np.inf)
-    assert abs(np.log(free / 0.5)) > np.log(1.2), free
-    # too few intervals decide nothing either
-    assert dec.fit_touching_weight(samples[:3], prior=0.5, min_gain=np.inf) == 0.5
 
 
 def test_one_pass_owner_and_ghost_ranks_match_the_box_geometry():

@@ -54,7 +54,7 @@ def test_dimer_mass_and_resting_on_both_spheres(example_installed):
     sim.run(until=0.05, progress=False)
     weight = sim.bodies.mass[0] * 9.81
     np.testing.assert_allclose(floor.force, [0, 0, -weight], atol=1e-6 * weight)
-    assert int(sim._diag[6]) == 2
+    assert int(sim.backend.diag[6]) == 2
 
 
 def test_linear_viscous_restitution_and_sliding_friction(example_installed):

@@ -17,6 +17,7 @@ import tempfile
 from collections import Counter
 from pathlib import Path
 
+import numba
 import numpy as np
 import trimesh
 from hypothesis import HealthCheck, given, settings
@@ -152,13 +153,22 @@ def test_material_misspelt(bad):
     refused("Material misspelt", bad, dpm.Material, "glass", density=2500.0, **{bad: 1.0})
 
 
+def valid_threads(v) -> bool:
+    """Whether ``v`` is a thread count ``Simulation`` takes: an int (not a bool) from 1 to
+    numba's NUMBA_NUM_THREADS."""
+    return (isinstance(v, int) and not isinstance(v, bool)
+            and 1 <= v <= numba.config.NUMBA_NUM_THREADS)
+
+
 SIM_BAD = {
     "dt": bad_positive(),
     "gravity": bad_vector(),
     "max_overlap": st.one_of(junk, non_finite, not_positive(), st.floats(min_value=2.01)),
     "overlap_tolerance": bad_non_negative(),
     "skin": bad_positive(),
-    "threads": bad_count().filter(lambda v: not (isinstance(v, int) and v < 0) or True),
+    # (and the integers about the valid counts but those: zero, counts past the cores)
+    "threads": st.one_of(bad_count(), st.integers(0, numba.config.NUMBA_NUM_THREADS + 8)
+                         ).filter(lambda v: not valid_threads(v)),
     "sphere_orientation": st.one_of(st.integers(), st.floats(), st.text(max_size=3)),
 }
 
@@ -418,6 +428,12 @@ def toml_value(v) -> str:
     raise TypeError(type(v))
 
 
+def plain_toml_key(key: str) -> bool:
+    """Whether ``key`` is valid TOML between double quotes as it is (no quote, backslash
+    or control character)."""
+    return not any(c in '"\\' or ord(c) < 0x20 or ord(c) == 0x7F for c in key)
+
+
 def to_toml(doc: dict, single: frozenset = frozenset()) -> str:
     """``doc`` as TOML; arrays of tables as [[name]] unless named in ``single`` (then
     written, wrongly, as one [name] table)."""
@@ -460,8 +476,10 @@ def test_base_scene_loads():
 @given(data=st.data(), k=st.integers(0, len(SCENE_VALUES) - 1))
 def test_scene_file_values(data, k):
     where, strategy = SCENE_VALUES[k]
+    # (a dict only with keys that toml_value writes as they are, so that the file is valid
+    # TOML and what is refused is the value, not the file's syntax)
     value = data.draw(strategy.filter(lambda v: not isinstance(v, dict) or all(
-        isinstance(x, float) and math.isfinite(x) or True for x in v.values())))
+        plain_toml_key(k) for k in v)))
     doc = copy_scene()
     node = doc
     for key in where[:-1]:

@@ -144,7 +144,7 @@ def test_clustered_bodies_write_their_elements(tmp_path):
     # each element sits at its body's pose: x = X + R(q) offset
     b = sim.bodies
     owner = sim.elements.owner
-    world = dpm.simulation._to_body(b.orientation[owner] * [1, -1, -1, -1],
+    world = dpm.measures.to_body(b.orientation[owner] * [1, -1, -1, -1],
                                     sim.elements.offset)
     np.testing.assert_allclose(el["position"], b.position[owner] + world, atol=1e-15)
     root = ET.parse(path.with_suffix(".elements.xdmf")).getroot()

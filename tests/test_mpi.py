@@ -62,7 +62,7 @@ try:
 except ImportError:
     HAVE_MPI4PY = False
 needs_mpi = pytest.mark.skipif(MPIEXEC is None or not HAVE_MPI4PY,
-                               reason="needs mpiexec and mpi4py (pip install 'dpm[mpi]')")
+                               reason="needs mpiexec and mpi4py (pip install 'dpm-granular[mpi]')")
 if os.environ.get("DPM_REQUIRE_MPI") == "1" and (MPIEXEC is None or not HAVE_MPI4PY):
     # (the CI sets it: its MPI tests must run, not be skipped)
     raise RuntimeError(f"DPM_REQUIRE_MPI=1 but mpiexec ({MPIEXEC}) or mpi4py "
@@ -312,7 +312,7 @@ def test_python_step_loop_matches_too(scene, tmp_path):
     """The step loop from Python (two compiled calls per step, messages by mpi4py: an MPI
     whose handles are not pointers) gives the serial end state as the compiled loop
     does: spheres with contact history crossing the cut, clusters at the corner."""
-    got = parallel(scene, 2, tmp_path, env={"DPM_MPI_LOOP": "python"})
+    got = parallel(scene, 2, tmp_path, "--python-loop")
     assert str(got["loop_used"]) == "python"
     assert_same(serial(scene), got)
 
@@ -334,7 +334,7 @@ def test_an_overlap_past_the_limit_stops_every_rank_at_the_serial_step(loop, las
     ref_step = sim.step_count
     assert 100 < ref_step < steps  # (it stops inside a call, after contact began)
     got = parallel("crash", 2, tmp_path, *(["--chunk", str(ref_step)] if last else []),
-                   env={"DPM_MPI_LOOP": "python"} if loop == "python" else None)
+                   *(["--python-loop"] if loop == "python" else []))
     assert str(got["loop_used"]) == loop
     assert int(got["stopped_at"]) == ref_step
     why, ref_why = str(got["stopped_why"]), str(err.value)
@@ -455,10 +455,12 @@ def test_bad_requests_are_named():
         MpiBackend(boxes=np.zeros((2, 3)))
     with pytest.raises(dpm.ParameterError, match="rebalance"):
         MpiBackend(rebalance=0.5)
-    with pytest.raises(dpm.ParameterError, match="weight='speed'"):
-        MpiBackend(weight="speed")
+    with pytest.raises(TypeError, match="'weight'"):  # (one cost model: no choice)
+        MpiBackend(weight="time")
     with pytest.raises(dpm.ParameterError, match="loop='fast'.*allowed: auto"):
         MpiBackend(loop="fast")
+    with pytest.raises(dpm.ParameterError, match="loop='python'.*allowed: auto"):
+        MpiBackend(loop="python")  # (the Python loop: where this MPI needs it, by itself)
     with pytest.raises(dpm.ParameterError, match="ghost_margin=-0.001.*allowed"):
         MpiBackend(ghost_margin=-1e-3)
     assert MpiBackend(ghost_margin=0).ghost_margin == 0.0

@@ -54,7 +54,7 @@ def _free_rotation(integrator, dt, w0, t_end):
     for _ in range(n // every):
         sim.run(steps=every, progress=False)
         q = sim.bodies.orientation
-        wb.append(dpm.simulation._to_body(q, sim.bodies.angular_velocity)[0])
+        wb.append(dpm.measures.to_body(q, sim.bodies.angular_velocity)[0])
         t.append(sim.time)
         energy.append(sim.kinetic_energy() / e0 - 1)
         lerr.append(np.linalg.norm(sim.angular_momentum() - l0) / np.linalg.norm(l0))
@@ -120,7 +120,7 @@ def test_dumbbell_rests_on_both_spheres():
     sim.run(until=0.08, progress=False)
     weight = sim.bodies.mass[0] * 9.81
     np.testing.assert_allclose(floor.force, [0, 0, -weight], atol=1e-3 * weight)
-    assert int(sim._diag[6]) == 2  # both elements touch the floor
+    assert int(sim.backend.diag[6]) == 2  # both elements touch the floor
     z = sim.elements.position[:, 2]
     np.testing.assert_allclose(z, z.mean(), atol=1e-7)  # level: the tilt has gone
     assert np.linalg.norm(sim.bodies.angular_velocity) < 1e-3

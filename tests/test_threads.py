@@ -49,7 +49,7 @@ def test_one_and_two_threads_give_identical_trajectories(two_pass):
         sim = _scene(threads)
         sim.backend.force_pass = "two_pass" if two_pass else "auto"
         sim.run(steps=5000, progress=False)
-        assert sim._diag[6] > 20  # a colliding scene, not a free fall
+        assert sim.backend.diag[6] > 20  # a colliding scene, not a free fall
         runs.append((sim.bodies.position.copy(), sim.bodies.velocity.copy(),
                      sim.bodies.angular_velocity.copy(), sim.boundaries[0].force.copy()))
     for a, b in zip(*runs, strict=True):
@@ -84,7 +84,7 @@ def test_clustered_bodies_one_and_two_threads_identical():
     for threads in (1, 2):
         sim = _scene(threads, clusters=True)
         sim.run(steps=3000, progress=False)
-        assert sim.backend.fused_chunks() == 0 and sim._diag[6] > 5
+        assert sim.backend.fused_chunks() == 0 and sim.backend.diag[6] > 5
         runs.append(_state(sim))
     for a, b in zip(*runs, strict=True):
         np.testing.assert_array_equal(a, b)
@@ -122,10 +122,13 @@ def test_thread_count_follows_a_scene_an_inlet_grows(monkeypatch):
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 threads")
 def test_a_run_on_one_thread_takes_the_one_thread_form(monkeypatch):
     """On one thread the step module's ``prange`` loops are plain loops (no parallel
-    launch per loop and step); two threads take the parallel form; DPM_ONE_THREAD_FORM=0
-    keeps the parallel form on one thread. (That both forms give the same bits is the
-    one-and-two-threads tests above and in tests/test_backend_contract.py.)"""
+    launch per loop and step); two threads take the parallel form; a backend that
+    declines the one-thread form (``one_thread_ok = False``, as the CUDA backend's host
+    parts) keeps the parallel form on one thread. (That both forms give the same bits is
+    the one-and-two-threads tests above and in tests/test_backend_contract.py.)"""
     from pathlib import Path
+
+    from dpm.backends.cpu import CpuBackend
 
     def module_of(threads):
         sim = _scene(threads)
@@ -136,7 +139,7 @@ def test_a_run_on_one_thread_takes_the_one_thread_form(monkeypatch):
     assert one is not two
     assert "prange(" not in Path(one.__file__).read_text()
     assert "prange(" in Path(two.__file__).read_text()
-    monkeypatch.setenv("DPM_ONE_THREAD_FORM", "0")
+    monkeypatch.setattr(CpuBackend, "one_thread_ok", False)
     assert module_of(1) is two
 
 

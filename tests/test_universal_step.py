@@ -117,13 +117,32 @@ def test_universal_table_layout():
     assert len(seen) >= 4  # the five contacts give at least four distinct compositions
 
 
+def test_quiet_holds_back_the_messages_inside_its_block_only(capsys):
+    """``dpm compile``'s throwaway scenes run inside :func:`dpm.warm.quiet`: no compile
+    message there, the next one outside is said, and the process's environment is left
+    as it was."""
+    env = dict(os.environ)
+    module = types.ModuleType("dpm_quiet_probe")
+    warm._ANNOUNCED.discard(module.__name__)
+    with warm.quiet():
+        with warm.quiet():
+            assert warm._quiet()
+        assert warm._quiet()
+        warm._announce(module, "held back")
+    assert not warm._quiet()
+    assert capsys.readouterr().err == ""
+    warm._announce(module, "said")
+    assert capsys.readouterr().err == "dpm: said\n"
+    assert dict(os.environ) == env
+
+
 def test_auto_takes_the_own_module_when_compiled_else_the_universal(monkeypatch, capsys):
     """"auto": the scene's own module when marked compiled; else the universal one, with
     a message, and the scene's own handed to a background compile, which marks it
     compiled for the next run."""
     end_state("mixed_laws", "scene")  # both compiled (the test above may have run)
     end_state("mixed_laws", "universal")
-    monkeypatch.delenv("DPM_QUIET", raising=False)
+    assert not warm._quiet()  # (dpm compile's quiet block ended with it)
     monkeypatch.setenv("DPM_BACKGROUND_COMPILE", "1")
     launched = []
 

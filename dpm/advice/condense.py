@@ -26,10 +26,10 @@ import numpy as np
 from .tables import DATA
 
 #: per-body cost of a step [ns]: velocity Verlet's pre-force loop 178 us and its second half
-#: kick ~30 us per 10,000 bodies (benchmarks/NOTES.md rows 13 and 15)
+#: kick ~30 us per 10,000 bodies (each loop timed alone)
 BODY_NS = 21.0
 #: one neighbour-list rebuild per element [ns], dense 10,648-sphere box, 3.2 ms
-#: (benchmarks/NOTES.md row 10; dilute: 4.8 ms)
+#: (one search pass into slots sized by the previous list; dilute: 4.8 ms)
 REBUILD_NS = 300.0
 #: explicit integrators whose measured step costs lie within this factor of velocity
 #: Verlet's are counted equal (the timings move by +-30 % on the shared machine)
@@ -149,8 +149,8 @@ def condense(results: Path, out: Path | None = None) -> dict[str, Any]:
                        "(benchmarks/advise_tables.py)",
             "elastic": "benchmarks/results/integrators.json (collision study)",
             "cost": "benchmarks/results/impact_models.json, integrators.json, box_settle.json, "
-                    "hopper_discharge.json, shapes_speed_vs_error.json; benchmarks/NOTES.md "
-                    "rows 10, 13, 15",
+                    "hopper_discharge.json, shapes_speed_vs_error.json; per-body and "
+                    "rebuild costs measured on box_settle (BODY_NS, REBUILD_NS)",
             "shapes": "benchmarks/results/shapes_speed_vs_error.json",
             "sensitivity": "benchmarks/results/advise.json (benchmarks/advise.py)",
         },
@@ -172,7 +172,7 @@ def condense(results: Path, out: Path | None = None) -> dict[str, Any]:
             #: counted in their first 0.02-0.1 s at the examples' steps)
             "rebuild_speed_factor": 0.3,
             #: touching pairs per sphere, settled box_settle (24,000 of 41,000 listed pairs
-            #: for 10,000 spheres, benchmarks/NOTES.md row 12): coordination 4.8
+            #: for 10,000 spheres): coordination 4.8
             "coordination": 4.8,
             "calibration": {
                 "box_settle_ns_per_particle_step": 1e9 / box["dpm"]["particle_steps_per_s"],

@@ -332,7 +332,7 @@ def _statements(q: Quantity, f: SceneFacts, mdl: Model, c: Prediction, sens: dic
         "starts within a step; friction, rolling resistance and the tangential spring are "
         "taken to err no more than the restitution",
         f"cost: one thread, {mdl.z:g} touching partners per element, per-contact costs of "
-        "benchmarks/impact_models.py, per-body and rebuild costs of benchmarks/NOTES.md; "
+        "benchmarks/impact_models.py, per-body and rebuild costs measured on box_settle; "
         "another integrator or model compiles its step module once (about a minute), not "
         "counted; N replicas cost N runs; the default's cost is its own step with the "
         "replicas it needs for the same tolerance",

@@ -18,7 +18,7 @@ def _pyplot() -> Any:
     try:
         import matplotlib
     except ImportError:
-        raise DpmError("dpm.analysis.picture needs matplotlib: pip install 'dpm[plot]' "
+        raise DpmError("dpm.analysis.picture needs matplotlib: pip install 'dpm-granular[plot]' "
                        "(or pip install matplotlib)") from None
     if matplotlib.get_backend().lower() not in ("agg", "pdf", "svg", "ps", "cairo"):
         try:

@@ -38,11 +38,9 @@ SMALL_SCENE = 4000
 #: of at least ``SORT_FROM`` elements: bodies inserted or mixed out of order (an inlet,
 #: a LIGGGHTS start, a drum) put a body's partners far apart in memory, which cost a
 #: settled bed of 2,000 clusters 1.34x on two threads against 1.91x in cell order
-#: (benchmarks/NOTES.md row 41)
 SORT_EVERY = 20
 #: the smallest scene renumbered by default (below it the scene sits in the caches; a
-#: shuffled box of 3,375 spheres ran 0.94 of its lattice order, and renumbered 0.95:
-#: NOTES row 64)
+#: shuffled box of 3,375 spheres ran 0.94 of its lattice order, and renumbered 0.95)
 SORT_FROM = SMALL_SCENE
 #: the renumbering is decided every ``SORT_CHECK_STEPS`` steps of a run, a kernel call
 #: ending there (:meth:`CpuBackend.sort_due`): a decision at whatever step a time-sized
@@ -51,13 +49,6 @@ SORT_FROM = SMALL_SCENE
 SORT_CHECK_STEPS = 1000
 #: the force forms (``force_pass``)
 FORCE_PASSES = ("auto", "fused", "two_pass")
-
-
-def one_thread_form_now() -> bool:
-    """Whether a step called now takes the step module's one-thread form: numba runs one
-    thread (set by the run) and ``$DPM_ONE_THREAD_FORM`` is not "0" (an A/B switch)."""
-    return (numba.get_num_threads() == 1
-            and os.environ.get("DPM_ONE_THREAD_FORM", "1") not in ("0", "", "no", "false"))
 
 
 def default_threads() -> int:
@@ -84,9 +75,8 @@ def threading_layer_advice(threads: int) -> str | None:
     does not ask for it: numba chose its layer at the process's first parallel launch,
     before ``import dpm`` put OpenMP first. On a 2-core machine a parallel launch on two
     threads costs 169 us on TBB against 4.2 us on OpenMP, and a settled bed of 2,000
-    clusters gains 1.46x from two threads on TBB against 1.67x on OpenMP
-    (``benchmarks/thread_ceiling.py``, benchmarks/NOTES.md row 54). None when there is
-    nothing to say."""
+    clusters gains 1.46x from two threads on TBB against 1.67x on OpenMP. None when
+    there is nothing to say."""
     if threads <= 1 or _LAYER_WARNED or "NUMBA_THREADING_LAYER" in os.environ:
         return None
     try:
@@ -142,8 +132,8 @@ class CpuBackend:
     #: whether this backend can run the universal step module (the MPI and CUDA backends
     #: call functions of the scene's own)
     universal_ok = True
-    #: whether a run on one thread may take the step module's one-thread form
-    #: (:func:`dpm.plan.one_thread_form`; ``$DPM_ONE_THREAD_FORM=0`` turns it off)
+    #: whether a run on one thread takes the step module's one-thread form
+    #: (:func:`dpm.plan.one_thread_form`)
     one_thread_ok = True
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
@@ -184,13 +174,6 @@ class CpuBackend:
         state["_universal_params"] = None
         state["_form"] = None
         return state
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        # (checkpoints written before the universal module: its attributes at defaults)
-        self.__dict__.update({"kernel_choice": warm.kernels_choice(None), "universal": False,
-                              "_universal_params": None, "_form": None,
-                              "_compiled": False})
-        self.__dict__.update(state)
 
     # ------------------------------------------------------------------ set-up
     def thread_count(self, n_elements: int) -> int:
@@ -241,7 +224,7 @@ class CpuBackend:
         plan = self.sim.plan
         fused = (plan.spheres_only if self.force_pass == "auto"
                  else self.force_pass == "fused" and plan.spheres_only)
-        want = (fused, self.one_thread_ok and one_thread_form_now())
+        want = (fused, self.one_thread_ok and numba.get_num_threads() == 1)
         if self.module is None or self._form != want:
             self._form = want
             self._compiled = False
@@ -421,7 +404,7 @@ class CpuBackend:
         (2 r_max + skin) / 2, z fastest) that holds their centre
         (:meth:`dpm.Simulation.permute`: every contact keeps its history). Half cells:
         on the shuffled box_settle packing they recovered 0.93 of the lattice order's
-        speed, whole search cells 0.86 (``benchmarks/cell_order.py``)."""
+        speed, whole search cells 0.86."""
         sim = self.sim
         b = sim.bodies
         self._rebuilds_since_sort = 0

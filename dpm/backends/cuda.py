@@ -36,7 +36,6 @@ host) and contact laws that act at a separation (JKR). Float64 throughout.
 
 from __future__ import annotations
 
-import math
 import os
 from typing import Any
 
@@ -179,7 +178,7 @@ class CudaBackend(CpuBackend):
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        super().__setstate__(state)
+        self.__dict__.update(state)
         self.cuda = cuda_module()
 
     # ------------------------------------------------------------------ host changes
@@ -637,8 +636,6 @@ class CudaBackend(CpuBackend):
             plan = [*pre, *decide, *rebuild, *forces]
             plan.append((self._frame_kernel, (self._dev["state"], self._dev["w_frame"],
                                               np.zeros((1, *self._dev["w_frame"].shape)), 0)))
-            speed = self.kernels().k_speed
-            plan.append((_Launch(speed, 1, 1), (1, self._dev["b_vel"], np.zeros(2))))
         finally:
             self.cuda = cuda
             self._dev = None
@@ -666,14 +663,3 @@ class CudaBackend(CpuBackend):
         """(index, speed) of the fastest body (host arrays: downloaded after each call)."""
         return super().max_speed()
 
-    def device_max_speed(self) -> float:
-        """The largest speed, reduced on the device (NaN if a velocity is NaN)."""
-        dev = self._dev
-        if dev is None:
-            return self.max_speed()[1]
-        k = self.kernels()
-        out = self.cuda.to_device(np.zeros(2))
-        nb = dev["b_vel"].shape[0]
-        _Launch(k.k_speed, max(1, math.ceil(nb / 128)), 128)(nb, dev["b_vel"], out)
-        v = out.copy_to_host()
-        return float("nan") if v[1] else math.sqrt(v[0])

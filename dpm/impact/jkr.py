@@ -22,12 +22,6 @@ def _beta(model) -> float:
     return 0.0 if e >= 1.0 else tsuji_beta_for_restitution(e)
 
 
-def pull_off_force(work_of_adhesion: float, reff: float) -> float:
-    """F_c = 3/2 pi W R* [N]: the largest tension a JKR contact carries under force
-    control (Johnson, Kendall & Roberts 1971)."""
-    return 1.5 * math.pi * work_of_adhesion * reff
-
-
 def critical_overlap(work_of_adhesion: float, estar: float, reff: float) -> float:
     """d_c = -3/4 (pi^2 W^2 R* / E*^2)^(1/3) [m] (negative): where a JKR contact breaks
     under displacement control."""

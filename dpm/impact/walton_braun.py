@@ -77,7 +77,3 @@ class WaltonBraun(ImpactModel):
         "tangential_damping_ratio": Parameter(default=None, low=0.0,
                                               doc="zeta_t (default: from restitution)"),
     }
-
-    @property
-    def unloading_stiffness(self) -> float:
-        return _unloading(self)

@@ -104,10 +104,10 @@ def _evaluated_rows(sim: Any) -> np.ndarray:
                              w.cell_start, w.cell_items, w.prim_cells)
     # (the two-pass module in the form the run's thread count takes: a clustered scene's
     # own, not a second module to compile)
-    from ..backends.cpu import one_thread_form_now
+    import numba
 
-    plan.module(False, one_thread_form_now()).contact_pass(0.0, ctl, bodies, elems, pairs,
-                                                           walls, bnd)
+    plan.module(False, numba.get_num_threads() == 1).contact_pass(0.0, ctl, bodies, elems,
+                                                                  pairs, walls, bnd)
     return rows
 
 

@@ -726,17 +726,6 @@ def k_step_end(state, max_overlap, dt, f_load, frame):
         step_end(state, max_overlap, dt, f_load, frame)
 
 
-def k_speed(n, vel, out):
-    """Largest |v|^2 (NaN if any velocity is NaN) into out[0]."""
-    b = cuda.grid(1)
-    if b < n:
-        v2 = vel[b, 0] * vel[b, 0] + vel[b, 1] * vel[b, 1] + vel[b, 2] * vel[b, 2]
-        if v2 != v2:
-            out[1] = 1.0
-        else:
-            cuda.atomic.max(out, 0, v2)
-
-
 DEVICE_FUNCTIONS = ("cell_of", "bucket_of", "axis_range", "search_pairs", "search_boundaries",
                     "merge_row", "sort_row", "body_pre_force", "element_contacts", "body_sum",
                     "decide", "step_end")

@@ -7,7 +7,7 @@ in that order again. ``np.lexsort`` does it in O(n log n) on two int64 keys; a c
 sort by row followed by an insertion sort by key inside each row (a row holds a few
 entries: a sphere touches ~12 neighbours) is O(n) and stable, as lexsort is, so that of
 equal (row, key) entries the first given stays first (3.6-5.5x faster than lexsort on a
-bed's list of 1e5-1e6 rows: ``python benchmarks/entry_order.py``).
+bed's list of 1e5-1e6 rows).
 
 Cached on disk (numba's ``cache=True``): these functions call no function of another
 file, so a cached copy cannot go stale.

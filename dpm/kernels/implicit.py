@@ -64,67 +64,16 @@ import math
 
 import numpy as np
 
-# ruff: noqa: I001  (the bindings block must stay between its markers)
-from .config import inline_jit, step_jit as jit
+# ruff: noqa: I001, F821  (the bindings block must stay between its markers; the names it
+# binds are written into the generated module only)
+from .config import inline_jit, step_jit as jit  # noqa: F401  (inline_jit: the bindings')
 from .neighbours import build_neighbour_list
 from .rigid_rotation import rotate_isotropic
 
 # --- bindings begin (dpm.plan rewrites this block) ---
-from .config import pair_row
-from .law_linear import linear_normal as normal_0
-from .tangential import linear_tangential as tangential_0
-from .law_hertz_mindlin import hertz_tsuji_normal as normal_1
-from .tangential import mindlin_tsuji_tangential as tangential_1
-
-ROLLING = False
-
-
-@inline_jit
-def law_0(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt, hist, k):
-    """linear_spring_dashpot: LinearNormal x LinearTangential."""
-    fn, kn = normal_0((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
-    ftx, fty, ftz = tangential_0((p[2], p[3], p[4]), fn, kn, delta, vtx, vty, vtz, nx, ny, nz,
-            meff, reff, dt, hist, k, 0)
-    return fn, ftx, fty, ftz, 0.0, 0.0, 0.0
-
-
-@inline_jit
-def normal_law_0(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k):
-    fn, kn = normal_0((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
-    return fn
-
-
-@inline_jit
-def law_1(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt, hist, k):
-    """hertz_mindlin: HertzTsujiNormal x MindlinTsujiTangential."""
-    fn, kn = normal_1((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
-    ftx, fty, ftz = tangential_1((p[2], p[1], p[3]), fn, kn, delta, vtx, vty, vtz, nx, ny, nz,
-            meff, reff, dt, hist, k, 0)
-    return fn, ftx, fty, ftz, 0.0, 0.0, 0.0
-
-
-@inline_jit
-def normal_law_1(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k):
-    fn, kn = normal_1((p[0], p[1]), delta, ddelta, meff, reff, dt, hist, k, 3)
-    return fn
-
-
-@inline_jit
-def pair_force(model, p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt,
-        hist, k):
-    """F_n, F_t, rolling torque of the contact law ``model`` of this scene."""
-    if model == 0:
-        return law_0(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt,
-                hist, k)
-    return law_1(p, delta, ddelta, vtx, vty, vtz, nx, ny, nz, meff, reff, wx, wy, wz, dt, hist, k)
-
-
-@inline_jit
-def pair_normal(model, p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k):
-    """The normal force F_n of the contact law ``model`` of this scene."""
-    if model == 0:
-        return normal_law_0(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k)
-    return normal_law_1(p, delta, ddelta, nx, ny, nz, meff, reff, dt, hist, k)
+# (empty here: :func:`dpm.plan.implicit_module` writes the scene's contact laws:
+# ``pair_row``, ``pair_force``, ``pair_normal``, ``ROLLING``; this file is only imported
+# for its constants, its functions run from the generated module)
 # --- bindings end ---
 
 STATUS_OK = 0

