@@ -108,7 +108,7 @@ def grid_floor(m: int, cell: float = 4e-3) -> tuple[np.ndarray, np.ndarray]:
 
 def sentinels(sim, w):
     """Far-away boundaries of every kind: the scene compiles the same step module as
-    tests/test_boundaries.py (one compile for both)."""
+    tests/physics/test_boundaries.py (one compile for both)."""
     sim.add_boundary("plane", material=w, point=(0, 0, -FAR), normal=(0, 0, 1))
     sim.add_boundary("wall", material=w, center=(FAR, 0, 0), half_extents=(0.01, 0.01))
     sim.add_boundary("tube", material=w, start=(FAR, FAR, 0), axis=(0, 0, 1), length=0.01,

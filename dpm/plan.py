@@ -397,7 +397,7 @@ def one_thread_form(src: str) -> str:
     a parallel loop (as plain ``@jit`` functions the same loops ran 4-5x slower: the
     docstring of :func:`dpm.kernels.step.fused_pass`). Each loop's iterations
     run in the same order as one chunk of the parallel form, so both forms give the same
-    bits (tests/test_backend_contract.py runs 1 and 2 threads)."""
+    bits (tests/kernels/test_backend_contract.py runs 1 and 2 threads)."""
     return src.replace("prange(", "range(") + "\n\n" + _ONE_THREAD_TAIL
 
 

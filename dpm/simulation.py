@@ -566,7 +566,7 @@ class Simulation:
         needed), both contact lists with each contact's history and flag (a pair stored
         the other way round has its vector history negated), the integrator's state. Ids
         do not change. The physics is the same; only the order in which a body's forces
-        are summed can change, by rounding (``tests/test_permute.py``)."""
+        are summed can change, by rounding (``tests/kernels/test_permute.py``)."""
         n = len(self.bodies)
         order = np.asarray(order)
         if (order.shape != (n,) or order.dtype.kind not in "iu"

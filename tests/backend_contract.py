@@ -6,7 +6,7 @@ The scenes are built only through the public API (``dpm.Simulation``, ``sim.cont
 position, velocity, angular velocity, orientation; per boundary: force and torque; the
 particle count and ids) is compared with a reference stored in
 ``tests/data/backend_contract/<scene>.npz``. The tests are in
-``tests/test_backend_contract.py``.
+``tests/kernels/test_backend_contract.py``.
 
 Scenes (grouped so that the suite compiles three step modules: one contact law,
 Hertz-Mindlin, and one integrator, velocity Verlet, everywhere):
@@ -31,7 +31,7 @@ these small scenes, which otherwise run on one thread). A new backend joins by
    ``device="cuda"``) and
 2. either being appended to ``BACKENDS`` below, or being named at run time without editing
    this file: ``DPM_BACKENDS='[{"device": "cuda"}]' python -m pytest
-   tests/test_backend_contract.py`` (a JSON list of keyword dicts; it replaces the list),
+   tests/kernels/test_backend_contract.py`` (a JSON list of keyword dicts; it replaces the list),
    or ``python tests/backend_contract.py --backend '{"device": "cuda"}'`` (prints each
    scene's error against the reference and its tolerance).
 
@@ -74,7 +74,7 @@ bugs), and prints the normalised errors. The response is linear (1e-17 m -> ~1e-
 machine that rounds differently kicks every step by about an ulp; summed over 400 steps
 that is of the order of the single 600-ulp kick. ``TOLERANCE`` is ~500-5000x above that
 and 100-10000x below a 0.01 % friction change (numbers in ``SENSITIVITY_NOTES``);
-``tests/test_backend_contract.py`` checks both sides on every run.
+``tests/kernels/test_backend_contract.py`` checks both sides on every run.
 """
 
 from __future__ import annotations

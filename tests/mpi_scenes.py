@@ -1,4 +1,4 @@
-"""Scenes run on several MPI ranks and on one process, for ``tests/test_mpi.py``.
+"""Scenes run on several MPI ranks and on one process, for ``tests/parallel/test_mpi.py``.
 
     mpiexec -n 2 python tests/mpi_scenes.py SCENE OUT.npz [--checkpoint STEP PATH]
     python tests/mpi_scenes.py SCENE OUT.npz --device cpu

@@ -19,7 +19,7 @@ third-derivative term of the velocity, a slip: see shared/seeds/ERRATA.md):
     x += c_0 dt^2/2 (a^e - a^p),   v += c_1 dt/2 (a^e - a^p),   a = a^e,
     j += 3 c_3 (a^e - a^p)/dt,     s += 12 c_4 (a^e - a^p)/dt^2.
 A trajectory that is a polynomial of degree q-1 (cubic for gear4, quartic for gear5) is
-integrated exactly (tests/test_integrators.py).
+integrated exactly (tests/physics/test_integrators.py).
 
 ``aux[i]``: 0:3 the predicted acceleration a^p, 3:6 the third derivative j, 6:9 (gear5) the
 fourth s. The acceleration a_n is F_n/m (c_2 = 1). Higher derivatives start at zero.

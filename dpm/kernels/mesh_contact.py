@@ -11,9 +11,9 @@ per mesh, applied to the contacts the closest-point test found (``tag``: feature
    centre lies over their common edge) count once.
 2. A contact whose closest point is an edge or vertex that the mesh marks inactive
    (edges between coplanar or concave neighbours, vertices whose edges are all inactive)
-   does not count: a neighbouring face carries that contact. Convex and concave are seen
-   from the side of the triangle the sphere's centre is on (the sign of the contact normal
-   along the face normal): a fold concave from the front is convex from behind, where a
+   does not count: a neighbouring face carries that contact. Convex and concave are as
+   seen on the side of the triangle the sphere's centre is on (the sign of the contact
+   normal along the face normal): a fold concave at the front is convex behind, where a
    two-sided mesh is touched too (a chute plate hit from below).
 3. A contact at an active (convex or open) edge or vertex does not count if a face contact
    of a triangle sharing that edge or vertex counts, nor if an earlier triangle already

@@ -26,7 +26,7 @@ spring alone against mu F_n, but adds the dashpot only while the spring sticks, 
 here the total is clipped as well, so |F_t| <= mu F_n always. (LAMMPS' older form and
 MercuryDPM store s = -(F_t + c_t v_t)/k_t, which loses 11-21 % of the sliding friction
 impulse of a Hertz-Mindlin oblique impact: the oblique-impact tests of
-tests/test_impact_models.py fail with it.)
+tests/physics/test_impact_models.py fail with it.)
 """
 
 import math

@@ -12,7 +12,7 @@ of latitude of a sphere the covered arcs are exact (another sphere covers one ar
 phi, the latitudes by Gauss-Legendre in a cosine-mapped variable between the latitudes
 where an intersection circle starts or ends (the square-root ends there become smooth).
 Non-overlapping spheres and a single sphere come out exact to rounding; overlapping ones
-to about 1e-10 relative (``tests/test_multisphere.py`` against 1-D integrals of
+to about 1e-10 relative (``tests/objects/test_multisphere.py`` against 1-D integrals of
 collinear unions and a Monte-Carlo estimate). LIGGGHTS samples the union by Monte Carlo
 (``ntry``) instead.
 

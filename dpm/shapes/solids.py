@@ -5,7 +5,7 @@ in each class (pictures in ``docs/shapes.md``). Following the thesis, the solids
 revolution (cylinder, cone, double cone, hyperboloid, barrel, disc) have their axis along
 x; the torus lies in the x-y plane with its axis along z. Volumes and inertias are closed
 forms (checked against trimesh's mass properties of fine meshes in
-``tests/test_shapes.py``; the thesis' slips listed in ``shared/seeds/ERRATA.md`` are
+``tests/objects/test_shapes.py``; the thesis' slips listed in ``shared/seeds/ERRATA.md`` are
 corrected). All lengths in metres.
 """
 

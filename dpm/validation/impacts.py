@@ -27,7 +27,7 @@ import numba
 import numpy as np
 
 #: the impact models every validation scene binds, in this order (the list and order of
-#: tests/test_impact_models.py, so both share one compiled step)
+#: tests/physics/test_impact_models.py, so both share one compiled step)
 BIND = ["linear_spring_dashpot", "maw_linear_spring", "hooke", "hertz_brilliantov",
         "hertz_mindlin", "walton_braun", "linear_cohesion"]
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "drop_test.py"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "drop_test.py"
 
 # relative tolerance on the height ratio at 100 steps per contact: the dashpot of the
 # linear laws jumps to c v at first touch, so the phase of the first step within the

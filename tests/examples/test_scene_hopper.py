@@ -11,7 +11,7 @@ from pathlib import Path
 import h5py
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "examples"))
 import hopper_discharge as hd  # noqa: E402
 
 from dpm import analysis as an  # noqa: E402

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "rotary_kiln.py"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "rotary_kiln.py"
 
 
 @pytest.fixture(scope="module")

@@ -26,7 +26,7 @@ import pytest
 
 import dpm
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _example():

@@ -23,7 +23,7 @@ import pytest
 
 import dpm
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "examples"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "examples"))
 import screening_machine as sm  # noqa: E402
 
 

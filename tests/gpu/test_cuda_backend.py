@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-HERE = Path(__file__).resolve().parent
+#: tests/, where the shared helper backend_contract.py is (for the subprocess's imports)
+TESTS = Path(__file__).resolve().parents[1]
 TOL = 1e-12
 #: steps of the small scene
 STEPS = 24
@@ -35,7 +36,7 @@ def _run_case(case: str, timeout: float = 900.0, sim: bool = True) -> dict:
     env.pop("NUMBA_ENABLE_CUDASIM", None)
     if sim:
         env["NUMBA_ENABLE_CUDASIM"] = "1"
-    env["PYTHONPATH"] = os.pathsep.join([str(HERE), env.get("PYTHONPATH", "")])
+    env["PYTHONPATH"] = os.pathsep.join([str(TESTS), env.get("PYTHONPATH", "")])
     out = subprocess.run([sys.executable, str(Path(__file__).resolve()), case],
                          capture_output=True, text=True, timeout=timeout, env=env,
                          stdin=subprocess.DEVNULL)

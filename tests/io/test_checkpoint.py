@@ -21,7 +21,7 @@ import pytest
 import dpm
 from dpm import checkpoint as ckpt
 
-SCRIPT = Path(__file__).parent / "scripts" / "restart_scene.py"
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "restart_scene.py"
 STEPS = 1200
 
 

@@ -11,7 +11,7 @@ import dpm
 from dpm.cli import main
 from dpm.io.scene import load_scene
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 SCENE = """
 [simulation]

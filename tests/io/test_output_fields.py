@@ -22,7 +22,7 @@ R = 1e-3
 
 
 def _scene(positions, device=None, friction=0.5):
-    """Spheres in a box open at the top: the laws and boundary of tests/test_io.py (the
+    """Spheres in a box open at the top: the laws and boundary of tests/io/test_io.py (the
     same compiled step)."""
     sim = dpm.Simulation(dt=1e-5, gravity=(0, 0, -G), device=device)
     m = dpm.Material("glass", density=2500, young=5e6, poisson=0.45)

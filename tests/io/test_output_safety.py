@@ -26,7 +26,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def _tiny_sim():
-    """48 spheres in a box: compiles the same kernels as tests/test_io.py."""
+    """48 spheres in a box: compiles the same kernels as tests/io/test_io.py."""
     sim = dpm.Simulation(dt=1e-5, gravity=(0, 0, -9.81))
     m = dpm.Material("glass", density=2500, young=5e6, poisson=0.45)
     sim.contact(m, m, model="hertz_mindlin", restitution=0.3, friction=0.5)

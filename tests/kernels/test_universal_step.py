@@ -11,6 +11,7 @@ import sys
 import types
 from pathlib import Path
 
+import backend_contract as bc  # tests/backend_contract.py (tests/conftest.py)
 import numpy as np
 import pytest
 
@@ -18,9 +19,6 @@ import dpm
 from dpm import universal_step, warm
 from dpm.backends.cpu import CpuBackend
 from dpm.errors import ParameterError
-
-sys.path.insert(0, str(Path(__file__).parent))
-import backend_contract as bc  # noqa: E402
 
 
 def mixed_laws(backend: dict) -> tuple[dpm.Simulation, int]:

@@ -19,7 +19,7 @@ from dpm.advice.tables import DATA, Tables, _envelope, _interp_loglog, load_tabl
 from dpm.cli import main
 from dpm.errors import ParameterError
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 BOX_TOML = ROOT / "examples" / "box_settle.toml"
 
 

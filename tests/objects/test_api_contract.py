@@ -87,7 +87,7 @@ def test_kernels_layer_imports_only_numpy_numba_math():
 
 def test_notice_and_is_root_in_one_process(capsys):
     """Serial: ``dpm.notice`` is print (its arguments too) and this process is the root
-    (under mpiexec: tests/test_mpi.py)."""
+    (under mpiexec: tests/parallel/test_mpi.py)."""
     assert dpm.is_root() is True
     dpm.notice("a", 1, sep="-", end="!\n")
     assert capsys.readouterr().out == "a-1!\n"

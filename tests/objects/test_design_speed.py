@@ -5,7 +5,7 @@ v sqrt(m*/k_n) (undamped). A scene whose bodies fall further than V allows gets 
 before the first step that names the parameter, its value, the fall height and speed and
 the overlap; the overlap guard's message names the approach speed its overlap needs. The
 scene (a meshed floor, spheres from an inlet 1 m above it) uses the law and integrator of
-tests/test_mesh_reference.py, so it shares that step module.
+tests/physics/test_mesh_reference.py, so it shares that step module.
 """
 
 import math

@@ -36,15 +36,16 @@ import subprocess
 import sys
 from pathlib import Path
 
+import mpi_scenes  # tests/mpi_scenes.py (tests/conftest.py puts tests/ on sys.path)
 import numpy as np
 import pytest
 
 import dpm
 
-HERE = Path(__file__).parent
-DRIVER = HERE / "mpi_scenes.py"
-sys.path.insert(0, str(HERE))
-import mpi_scenes  # noqa: E402
+#: tests/, where the shared helpers are (mpi_scenes.py, backend_contract.py, scripts/)
+TESTS = Path(__file__).resolve().parents[1]
+ROOT = TESTS.parent
+DRIVER = TESTS / "mpi_scenes.py"
 
 
 def _mpiexec() -> str | None:
@@ -78,7 +79,7 @@ def _env() -> dict[str, str]:
            if not k.startswith(("OMPI_", "PMI_", "PMIX_", "PRTE_"))}
     env["NUMBA_NUM_THREADS"] = "1"
     env["PYTHONPATH"] = os.pathsep.join(
-        [str(HERE.parent)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
+        [str(ROOT)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
     return env
 
 
@@ -431,13 +432,13 @@ def test_long_calls_keep_the_balance(tmp_path):
 @pytest.mark.parametrize("ranks", [2, 3])
 def test_backend_contract_on_ranks(ranks):
     out = mpirun(ranks, "--backend", '{"device": "mpi"}',
-                 script=HERE / "backend_contract.py", timeout=1500)
+                 script=TESTS / "backend_contract.py", timeout=1500)
     assert out.count(": ok") >= ranks * 3, out  # (each rank prints each scene)
 
 
 def test_serial_run_never_imports_mpi4py():
     code = ("import sys\n"
-            f"sys.path.insert(0, {str(HERE)!r})\n"
+            f"sys.path.insert(0, {str(TESTS)!r})\n"
             "import mpi_scenes\n"
             "sim, _ = mpi_scenes.slide(None)\n"
             "sim.run(steps=2, progress=False)\n"
@@ -524,7 +525,7 @@ def test_implicit_integrator_refused_across_ranks():
 def test_dpm_run_scene_file_under_mpiexec(tmp_path):
     """``mpiexec -n 2 dpm run scene.toml``: one summary, one output file, the serial
     trajectory."""
-    scene = HERE.parent / "examples" / "box_settle.toml"
+    scene = ROOT / "examples" / "box_settle.toml"
     args = ["run", str(scene), "--steps", "1100", "--no-progress", "--overwrite"]
     par, ser = tmp_path / "par", tmp_path / "ser"
     par.mkdir()
@@ -701,7 +702,7 @@ def test_gather_messages_round_trip_exactly():
 def test_notice_prints_once_and_one_rank_writes(tmp_path):
     """A script's messages (``dpm.notice``) appear once under mpiexec and its own files
     are written by one rank (``dpm.is_root``), while plain print runs on every rank."""
-    stdout = mpirun(3, str(tmp_path), script=HERE / "scripts" / "rank_notice.py")
+    stdout = mpirun(3, str(tmp_path), script=TESTS / "scripts" / "rank_notice.py")
     assert stdout.count("notice from | the script") == 1, stdout
     assert sorted(line for line in stdout.splitlines() if line.startswith("print from")) == [
         "print from rank 0", "print from rank 1", "print from rank 2"]

@@ -125,7 +125,7 @@ def test_a_run_on_one_thread_takes_the_one_thread_form(monkeypatch):
     launch per loop and step); two threads take the parallel form; a backend that
     declines the one-thread form (``one_thread_ok = False``, as the CUDA backend's host
     parts) keeps the parallel form on one thread. (That both forms give the same bits is
-    the one-and-two-threads tests above and in tests/test_backend_contract.py.)"""
+    the one-and-two-threads tests above and in tests/kernels/test_backend_contract.py.)"""
     from pathlib import Path
 
     from dpm.backends.cpu import CpuBackend

@@ -334,7 +334,7 @@ def test_picture_without_matplotlib(monkeypatch):
 
 # ---------------------------------------------------------------- a live Simulation
 def test_live_simulation_thermo_and_energy(tmp_path):
-    """48 spheres in a box (the kernels of tests/test_io.py): Thermo at output frames and
+    """48 spheres in a box (the kernels of tests/io/test_io.py): Thermo at output frames and
     driven in pieces, its rows in /thermo, the energy book, overlaps and forces."""
     sim = dpm.Simulation(dt=1e-5, gravity=(0, 0, -9.81))
     m = dpm.Material("glass", density=2500, young=5e6, poisson=0.45)

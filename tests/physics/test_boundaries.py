@@ -89,8 +89,9 @@ def test_many_kind_scenes_call_closest_from_their_searches():
     """A scene of few boundary kinds inlines its ``closest`` everywhere; past
     ``INLINE_SEARCH_KINDS`` the list searches and checks call one compiled
     ``closest_call`` (an inlined copy per call site made a six-kind module compile ~3x
-    longer, benchmarks/NOTES.md row 75) while the contact loop still inlines it. The same
-    results either way: the sentinel scenes of this module have every kind."""
+    longer: each copy types all six kinds' geometry functions anew) while the contact
+    loop still inlines it. The same results either way: the sentinel scenes of this module
+    have every kind."""
     from dpm.boundaries.primitives import BUILTIN_CODES
     from dpm.kernels.boundary_geometry import PLANE
 

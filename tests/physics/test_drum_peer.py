@@ -28,9 +28,9 @@ import pytest
 
 pytest.importorskip("trimesh")
 pytest.importorskip("scipy")
-HERE = Path(__file__).resolve().parent
+ROOT = Path(__file__).resolve().parents[2]
 _spec = importlib.util.spec_from_file_location("drum_peer_bench",
-                                               HERE.parent / "benchmarks" / "drum_peer.py")
+                                               ROOT / "benchmarks" / "drum_peer.py")
 dp = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(dp)
 

@@ -15,7 +15,7 @@ import dpm
 from dpm import analysis as an
 from dpm.motion import frames
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "grate.py"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "grate.py"
 
 
 def closed_form(t: float, A: float, v: float, tp: float, phase: float = 0.0

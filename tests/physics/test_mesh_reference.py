@@ -8,7 +8,7 @@ and the same rules written over sets. Scenes: an open-top container with an incl
 chute plate and a tent-shaped ridge on its floor (concave corners and vertices, convex
 ridge and rim edges, the chute's open edges, both sides of the plate); a W-shaped trough
 (a convex ridge between two concave folds) with a sphere rolled across the ridge into a
-fold. The law and integrator are the meshGran port's (tests/test_meshgran_port.py), so the
+fold. The law and integrator are the meshGran port's (tests/physics/test_meshgran_port.py), so the
 step module is shared.
 """
 

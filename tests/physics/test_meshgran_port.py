@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 pytest.importorskip("trimesh")
-HERE = Path(__file__).resolve().parent
+ROOT = Path(__file__).resolve().parents[2]
 _spec = importlib.util.spec_from_file_location("meshgran_bench",
-                                               HERE.parent / "benchmarks" / "meshgran.py")
+                                               ROOT / "benchmarks" / "meshgran.py")
 mg = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(mg)
 

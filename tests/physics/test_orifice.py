@@ -10,7 +10,7 @@
 * A sphere in a square opening of a rectangular plate rests on its 4 edges (mesh rules).
 * Bad parameters are named.
 
-The scenes share the step module of tests/test_boundaries.py (sentinel boundaries of every
+The scenes share the step module of tests/physics/test_boundaries.py (sentinel boundaries of every
 kind; the round plate is kind AXI, the rectangular one TRIANGLE).
 """
 

@@ -34,7 +34,7 @@ import pytest
 import dpm
 from dpm import plugins
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 PKG = ROOT / "plugins" / "dpm-contrib-example"
 NAMES = (("impact_model", "kelvin_voigt"), ("shape", "spherocylinder"), ("motion", "orbit"))
 SOURCE = "dpm-contrib-example:contrib"

@@ -5,7 +5,7 @@ broken classes are defined here (a law with a force at zero overlap, a model sta
 wrong restitution, shapes with a wrong mass, inertia or centre, or an element outside the
 solid, a plane whose primitive is shifted or tilted) and each must fail its check.
 
-The engine runs bind the laws of tests/test_impact_models.py in its order, so they use
+The engine runs bind the laws of tests/physics/test_impact_models.py in its order, so they use
 the two-sphere step module that file compiles; they are in the slow set, which CI runs
 after the fast one (the module is cached by then: no compile of their own).
 """
@@ -30,7 +30,7 @@ from dpm.shapes import BodyBatch
 from dpm.shapes.sphere import Sphere
 from dpm.testing import ContractError
 
-#: the laws of tests/test_impact_models.py (its BIND), in its order
+#: the laws of tests/physics/test_impact_models.py (its BIND), in its order
 BIND = ["linear_spring_dashpot", "maw_linear_spring", "hooke", "hertz_brilliantov",
         "hertz_mindlin", "walton_braun", "linear_cohesion"]
 MINIMAL = {"linear_spring_dashpot": {"stiffness": 500.0}, "walton_braun": {"stiffness": 500.0},
@@ -47,7 +47,7 @@ class TestHertzMindlin(dpm.testing.ImpactModelContract):
     bind_models = BIND
 
     # (slow: the first of the suite's runs would compile the two-sphere step module that
-    # tests/test_impact_models.py compiles in the fast run; after it, they take a second)
+    # tests/physics/test_impact_models.py compiles in the fast run; after it, they take a second)
     @pytest.mark.slow
     def test_engine_momentum_conserved(self):
         super().test_engine_momentum_conserved()

@@ -11,7 +11,7 @@ import pytest
 import dpm
 from dpm import plugins
 
-PKG = Path(__file__).resolve().parent.parent / "plugins" / "dpm-example-plugin"
+PKG = Path(__file__).resolve().parents[2] / "plugins" / "dpm-example-plugin"
 
 
 @pytest.fixture

@@ -1,5 +1,5 @@
 """A scene with everything a checkpoint must carry, run in a process of its own by
-tests/test_checkpoint.py: clustered bodies (cylinders) in a box, spheres and cylinders fed
+tests/io/test_checkpoint.py: clustered bodies (cylinders) in a box, spheres and cylinders fed
 by an inlet (a size range, random orientations), an outlet in a floor corner, a rotating
 triangle-mesh paddle, the Gear integrator, output frames and periodic checkpoints, bodies
 renumbered in cell order.
