@@ -20,8 +20,14 @@ onto it: a run killed at any moment leaves the previous checkpoint intact.
 
 Restoring unpickles the object graph: classes are found by their module and name, so a
 scene built from classes defined in a script restarts from that script (``__main__``),
-and a checkpoint is only as trustworthy as its origin (pickle runs code on load: restart
-your own files only).
+and a checkpoint is only as trustworthy as its origin. Load only checkpoints you trust: a
+checkpoint is a pickle, loading it can run code.
+
+A checkpoint also records where it was written (attribute ``path``) and what identifies
+the output file at that moment (attribute ``output``, JSON: the file's scene fingerprint,
+frame count, and the step, time and a digest of its last frame). :func:`restart`
+continues that output file only when the checkpoint is restarted where it was written (or
+when asked, ``output="continue"``), and only if the file is still that run's file.
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ import json
 import os
 import pickle
 import re
+import tempfile
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -179,6 +186,7 @@ def _fsync_dir(path: Path) -> None:
 def write(sim: Simulation, path: str | os.PathLike) -> Path:
     """Write a checkpoint of ``sim`` to ``path`` atomically; return the path."""
     from . import __version__
+    from .io.hdf5 import identity
 
     path = Path(path)
     if path.is_dir():
@@ -216,6 +224,11 @@ def write(sim: Simulation, path: str | os.PathLike) -> Path:
             a["bodies"] = len(sim.bodies)
             a["scene"] = json.dumps(description, sort_keys=True)
             a["fingerprint"] = fingerprint(description)
+            # where it was written (a copy elsewhere does not continue the run's output)
+            # and what identifies the output file (checked when it is resumed)
+            a["path"] = os.path.realpath(path)
+            a["output"] = json.dumps(identity(sim._writer) if sim._writer is not None
+                                     else {}, sort_keys=True)
             g = f.create_group("arrays")
             for name, arr in pickler.arrays.items():
                 g.create_dataset(name, data=arr)
@@ -250,6 +263,33 @@ def numbered_files(base: Path) -> list[tuple[int, Path]]:
     return sorted(found)
 
 
+def check_directory(base: Path, call: str) -> None:
+    """Check when checkpoints are asked for that they can be written beside ``base``: its
+    directory exists (or is created here, as ``sim.output()`` does) and takes new files.
+    Raises ParameterError naming the parameter, its value and what is allowed."""
+    allowed = "allowed: a file name in a directory that exists (or can be created) and " \
+              "is writable"
+    parent = base.parent
+    above = parent
+    while not above.exists() and above != above.parent:
+        above = above.parent
+    if not above.is_dir():
+        raise ParameterError(f"{call}: path={str(base)!r}: {str(above)!r} is a file, not a "
+                             f"directory; {allowed}")
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ParameterError(f"{call}: path={str(base)!r}: its directory {str(parent)!r} "
+                             f"cannot be created ({e.strerror or e}); {allowed}") from None
+    try:
+        fd, probe = tempfile.mkstemp(dir=parent, prefix=f".{base.name}.", suffix=".probe")
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as e:
+        raise ParameterError(f"{call}: path={str(base)!r}: no file can be created in "
+                             f"{str(parent)!r} ({e.strerror or e}); {allowed}") from None
+
+
 class Schedule:
     """Periodic checkpoints of a run (:meth:`dpm.Simulation.checkpoint_every`): every
     ``every`` seconds (kept in seconds when dt changes) or ``every_steps`` steps, to
@@ -257,6 +297,7 @@ class Schedule:
 
     def __init__(self, base: Path, every: float | None, every_steps: int | None,
                  keep: int, step: int, dt: float) -> None:
+        check_directory(Path(base), "sim.checkpoint_every()")
         self.base = base
         self.every = every
         self.every_steps = every_steps
@@ -307,18 +348,41 @@ def read_attrs(path: str | os.PathLike) -> dict[str, Any]:
     return attrs
 
 
-def restart(path: str | os.PathLike, scene: Simulation | None = None) -> Simulation:
+def restart(path: str | os.PathLike, scene: Simulation | None = None,
+            output: str | os.PathLike | None = "auto") -> Simulation:
     """The simulation stored in the checkpoint at ``path`` (or the newest numbered one
     beside it), ready to run on: ``sim.run(...)`` continues the trajectory bit for bit.
 
+    Load only checkpoints you trust: a checkpoint is a pickle, loading it can run code.
+
     A checkpoint of another dpm version or format is refused with the reason. With
     ``scene`` (the same scene built again, by a script or a TOML file) the checkpoint must
-    be of that scene: the first difference is named. The output file the run was writing
-    is reopened and cut back to the frames the checkpoint had written (the restarted run
-    writes the later ones again, identically), periodic checkpoints go on.
+    be of that scene: the first difference is named.
+
+    ``output`` says what happens to the output file the run was writing:
+
+    - ``"auto"`` (default): restarted where it was written (the run killed and restarted
+      in place), the file is reopened and cut back to the frames the checkpoint had
+      written (the restarted run writes the later ones again, identically), and periodic
+      checkpoints go on. A checkpoint restarted from anywhere else (a copy, or a moved
+      file) never touches the original run's files: the restarted run writes no output
+      until ``sim.output(...)`` is called (with a warning), and its periodic checkpoints
+      go beside the checkpoint it was restarted from.
+    - ``"continue"``: continue the run's output file wherever the checkpoint is.
+    - a path: continue that file (a copy of the run's output, e.g. of a copied run
+      directory).
+    - ``None``: write no output until ``sim.output(...)`` is called.
+
+    A file that is continued must be the one the checkpoint's run wrote (its scene
+    fingerprint, frame count and last frame are compared: a file another run replaced is
+    refused by name) and must not be written by a live process (refused, naming it).
     """
     from . import __version__
 
+    if not (output is None or isinstance(output, str | os.PathLike)) \
+            or isinstance(output, bool) or (isinstance(output, str) and not output.strip()):
+        raise ParameterError(f"dpm.restart(): output={output!r}; allowed: 'auto', "
+                             "'continue', None or the path of the run's output file")
     p = latest(path)
     attrs = read_attrs(p)
     if int(attrs.get("format_version", -1)) != FORMAT_VERSION:
@@ -345,8 +409,64 @@ def restart(path: str | os.PathLike, scene: Simulation | None = None) -> Simulat
                 f"({exc}); restart from the script (or with the plugin) that built the "
                 "scene") from None
     sim.backend = backend_here(sim.backend)
+    _choose_output(sim, p, attrs, output)
     sim._restored(p)
     return sim
+
+
+def _text(value: Any) -> str | None:
+    if value is None:
+        return None
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
+def _choose_output(sim: Simulation, p: Path, attrs: dict[str, Any],
+                   output: str | os.PathLike | None) -> None:
+    """Decide which output file the restored ``sim`` goes on writing (see :func:`restart`)
+    and put it, with what identifies it, in the state :meth:`Simulation._restored`
+    reopens; where none is continued, the run writes no output until ``sim.output()``."""
+    written = _text(attrs.get("path"))
+    # (a checkpoint without the attribute predates it: restarted as before, in place)
+    moved = written is not None and written != os.path.realpath(p)
+    ws = sim.__dict__.get("_writer_state")
+    text = _text(attrs.get("output"))
+    expect = json.loads(text) if text else None
+    keyword = output if isinstance(output, str) and output in ("auto", "continue") else None
+    if moved and keyword != "continue":
+        ck = getattr(sim, "_checkpoints", None)
+        if ck is not None:  # periodic checkpoints beside this copy, not the original's
+            ck.base = _relocated(Path(ck.base), p)
+    if keyword == "continue" or (keyword == "auto" and not moved):
+        target = None if ws is None else Path(ws["path"])
+    elif output is None or keyword == "auto":
+        if ws is not None and keyword == "auto":
+            warnings.warn(f"dpm.restart(): {str(p)!r} is not where its run wrote it "
+                          f"({written!r}): the run's output {ws['path']!r} is left "
+                          f"untouched and the restarted run writes no output until "
+                          f"sim.output(...) is called (output='continue' continues that "
+                          f"file)", stacklevel=3)
+        target = None
+    else:
+        if ws is None:
+            raise ParameterError(f"dpm.restart(): output={str(output)!r}: the run of "
+                                 f"{str(p)!r} wrote no output file to continue; call "
+                                 f"sim.output(...) after the restart instead")
+        target = Path(output)
+    if target is None:
+        sim.__dict__["_writer_state"] = None
+        sim._output_path = None
+        return
+    sim.__dict__["_writer_state"] = dict(ws, path=str(target), expect=expect)
+    sim._output_path = str(target)
+
+
+def _relocated(base: Path, p: Path) -> Path:
+    """The base name of the periodic checkpoints of a run restarted from the checkpoint
+    ``p`` that is not where it was written: beside ``p``, with the original base name if
+    ``p`` is one of its numbered files, else ``p``'s own name."""
+    pat = re.compile(re.escape(base.stem) + r"\.\d{" + str(STEP_DIGITS) + "}"
+                     + re.escape(base.suffix) + "$")
+    return p.parent / base.name if pat.match(p.name) else p
 
 
 def backend_here(backend: Any) -> Any:
@@ -389,5 +509,6 @@ def resume_output(sim: Simulation, state: dict[str, Any] | None) -> None:
         sim._writer.frames, sim._writer.removed = int(state["frames"]), int(state["removed"])
         sim.last_output = sim._writer
         return
-    sim._writer = Writer.resume(path, sim, int(state["frames"]), int(state["removed"]))
+    sim._writer = Writer.resume(path, sim, int(state["frames"]), int(state["removed"]),
+                                expect=state.get("expect"))
     sim.last_output = sim._writer

@@ -212,7 +212,11 @@ def main(argv: list[str] | None = None) -> int:
                    help="replace an existing output file (it is kept otherwise)")
     r.add_argument("--restart", metavar="CHECKPOINT", default=None,
                    help="go on from a checkpoint of this scene (a file, or the base name of "
-                   "numbered ones: the newest)")
+                   "numbered ones: the newest). Load only checkpoints you trust: a "
+                   "checkpoint is a pickle, loading it can run code. The run's output file "
+                   "is continued only from a checkpoint where its run wrote it; a copy "
+                   "restarted elsewhere leaves the original's files alone and writes no "
+                   "output)")
     r.add_argument("--checkpoint-every", type=float, default=None, metavar="SECONDS",
                    help="write checkpoints every SECONDS of simulated time")
     r.add_argument("--checkpoint", default=None, metavar="PATH",

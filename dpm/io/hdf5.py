@@ -10,15 +10,25 @@ always opens; it is then reopened in SWMR mode and flushed after every frame. Ea
 is flushed in two steps, the particle rows and the frame table first, ``/frames/time``
 extended last, so a run killed at any moment leaves a readable file whose frames are the
 ones fully written (:func:`load` also drops a frame whose rows are not all there).
+
+One writer per file: a :class:`Writer` holds an exclusive lock on its file for its whole
+life (a Linux open-file-description lock of a byte far past the end of the file, which
+readers and HDF5 never take, so ``dpm.load`` and SWMR readers work while it writes); a
+new writer of an existing file (a restart, or a new run with ``overwrite=True``) must take
+it first, so it is refused while a live process writes the file, naming that process (the
+lock of a dead process is released by the system).
 """
 
 from __future__ import annotations
 
+import errno
+import hashlib
 import json
 import os
 import tempfile
 import time as _time
 import warnings
+import weakref
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -30,6 +40,11 @@ from .contacts import CONTACT_FIELDS, PARTICLE_FIELDS
 from .solids import SOLID_FRAME_FIELDS, solid_rows
 
 h5py = lazy_module("h5py")
+
+try:
+    import fcntl
+except ImportError:  # (no file locks here: one writer per file is not enforced)
+    fcntl = None
 
 if TYPE_CHECKING:
     from ..simulation import Simulation
@@ -139,6 +154,118 @@ def _exists_message(path: Path | str) -> str:
             f"to replace it (and its XDMF sidecars) or choose another name")
 
 
+# ----------------------------------------------------------------- one writer per file
+#: the files this process's writers hold: (device, inode) -> the Writer (weakly)
+_HELD: dict[tuple[int, int], Any] = {}
+#: the writer's lock: an open-file-description (OFD) write lock of this byte of the file,
+#: far past its end (HDF5 and readers never lock it; HDF5's own locks are flock locks,
+#: independent of these); the owner's process id is the offset of a second one-byte lock
+#: after it (OFD locks carry no process id), found with F_OFD_GETLK
+_LOCK_AT = 1 << 62
+_PID_SPAN = 1 << 31
+
+
+def _lock(fd: int, cmd: int, kind: int, start: int, length: int) -> tuple[int, ...]:
+    import struct
+
+    fmt = "hhqqi4x"  # struct flock: l_type, l_whence, l_start, l_len, l_pid (Linux)
+    out = fcntl.fcntl(fd, cmd, struct.pack(fmt, kind, os.SEEK_SET, start, length, 0))
+    return struct.unpack(fmt, out)
+
+
+class _Claim:
+    """An open descriptor of a run file that holds the writer's lock on it (see
+    :func:`_claim`). Released by :meth:`release` or when it is collected."""
+
+    def __init__(self, fd: int, key: tuple[int, int]) -> None:
+        self.fd, self.key = fd, key
+
+    def release(self) -> None:
+        fd, self.fd = self.fd, -1
+        if fd >= 0:
+            os.close(fd)  # (releases the locks)
+            owner = _HELD.get(self.key)
+            if owner is not None and getattr(owner(), "_claim", None) in (self, None):
+                _HELD.pop(self.key, None)
+
+    def __del__(self) -> None:
+        try:
+            self.release()
+        except Exception:  # noqa: BLE001  (at interpreter exit)
+            pass
+
+
+def _holder(fd: int) -> str:
+    """" by process N" for the owner of the writer's lock on the file open at ``fd``; ""
+    where it cannot be told."""
+    try:
+        kind, _, start, _, _ = _lock(fd, fcntl.F_OFD_GETLK, fcntl.F_WRLCK, _LOCK_AT + 1,
+                                     _PID_SPAN)
+    except (OSError, ValueError):
+        return ""
+    if kind == fcntl.F_UNLCK:
+        return ""
+    pid = start - _LOCK_AT - 1
+    return f" by process {pid}{' (this process)' if pid == os.getpid() else ''}"
+
+
+def _claim(path: Path, call: str) -> _Claim | None:
+    """Claim the existing file ``path`` for writing, for the writer's whole life: an
+    exclusive lock that readers never take, refused with :class:`ParameterError` naming the
+    file and the process that holds it when a live writer has it. A lock of this process's
+    own writer whose file was closed is released first. The lock of a dead process is
+    released by the system. None where the system or the file system takes no such lock
+    (then nothing is enforced, as before)."""
+    setlk = getattr(fcntl, "F_OFD_SETLK", None)
+    if setlk is None:
+        return None
+    try:
+        fd = os.open(path, os.O_RDWR)
+    except OSError:
+        return None
+    st = os.fstat(fd)
+    key = (st.st_dev, st.st_ino)
+    for attempt in (0, 1):
+        try:
+            _lock(fd, setlk, fcntl.F_WRLCK, _LOCK_AT, 1)
+            break
+        except OSError as e:
+            if e.errno not in (errno.EAGAIN, errno.EACCES):  # no such locks here
+                os.close(fd)
+                return None
+        ref = _HELD.get(key)
+        writer = ref() if ref is not None else None
+        if attempt == 0 and writer is not None and writer.closed:
+            writer._release()  # (its file was closed without Writer.close())
+            continue
+        who = (" by another Writer of this process (a Simulation still writing it)"
+               if writer is not None else _holder(fd) or " by another process")
+        os.close(fd)
+        raise ParameterError(
+            f"{call}: {str(path)!r} is being written{who}; a run file has one writer. "
+            f"Let that run end (or stop it) first, or write to another path")
+    try:  # (the owner's process id, for the message of a refused writer)
+        _lock(fd, setlk, fcntl.F_RDLCK, _LOCK_AT + 1 + os.getpid(), 1)
+    except OSError:
+        pass
+    return _Claim(fd, key)
+
+
+def _open_rw(path: Path) -> Any:
+    """The run file opened for writing (HDF5's own locks as ever: the writer's lock is
+    another kind)."""
+    return h5py.File(path, "r+", libver="latest")
+
+
+def check_not_written(path: str | Path, call: str) -> None:
+    """Refuse (ParameterError) an existing file that a live writer holds."""
+    path = Path(path)
+    if path.is_file():
+        claim = _claim(path, call)
+        if claim is not None:
+            claim.release()
+
+
 def check_output_path(path: str | Path, overwrite: bool, call: str = "sim.output()") -> None:
     """Check at ``output()`` time that a run file can be created at ``path``: not a
     directory, not an existing file unless ``overwrite``, its directory exists or is
@@ -150,6 +277,7 @@ def check_output_path(path: str | Path, overwrite: bool, call: str = "sim.output
     if path.exists() or path.is_symlink():
         if not overwrite:
             raise ParameterError(_exists_message(path))
+        check_not_written(path, call)  # (overwrite=True: never a file a live run writes)
     parent = path.parent
     above = parent
     while not above.exists() and above != above.parent:
@@ -439,31 +567,57 @@ class Writer:
             raise ParameterError(f"sim.output(): {str(self.path)!r} is a directory")
         if not overwrite and self.path.exists():
             raise ParameterError(_exists_message(self.path))
+        self._claim = None
+        # overwrite: the file it replaces must not be one a live process writes (held
+        # until the new file is in its place)
+        old = _claim(self.path, "sim.output()") if self.path.is_file() else None
         tmp = _temp_beside(self.path)
+        claim = None
         try:
             with h5py.File(tmp, "w", libver="latest") as f:
                 _layout(f, sim, fields, contacts, solids)
+            claim = _claim(tmp, "sim.output()")  # (the new file is ours from its birth)
             _publish(tmp, self.path, overwrite)
         except BaseException:
             tmp.unlink(missing_ok=True)
+            if claim is not None:
+                claim.release()
             raise
+        finally:
+            if old is not None:
+                old.release()
         for s in (*sidecars(self.path), *(self.path.with_suffix(x) for x in OTHER_SIDECARS)):
             s.unlink(missing_ok=True)  # (those of a replaced file describe other frames)
-        self._open()
+        self._open(claim)
         _start_counts(self, sim)
         if solids:
             from .solids import Solids
 
             self.solids = Solids(self.file)
 
-    def _open(self) -> None:
-        self.file = h5py.File(self.path, "r+", libver="latest")
-        self.file.swmr_mode = True
+    def _open(self, claim: _Claim | None) -> None:
+        """Open the file for SWMR writing, holding ``claim`` (its lock) until close."""
+        self._claim = claim
+        try:
+            self.file = _open_rw(self.path)
+            self.file.swmr_mode = True
+        except BaseException:
+            self._release()
+            raise
+        if claim is not None:
+            _HELD[claim.key] = weakref.ref(self)
         self._last_xdmf = 0.0
         self._local = None  # the surfaces' local vertices (read at the first frame)
 
+    def _release(self) -> None:
+        """Give the file's lock back (after its HDF5 file is closed)."""
+        claim, self._claim = getattr(self, "_claim", None), None
+        if claim is not None:
+            claim.release()
+
     @classmethod
-    def resume(cls, path: str | Path, sim: Simulation, frames: int, removed: int) -> Writer:
+    def resume(cls, path: str | Path, sim: Simulation, frames: int, removed: int,
+               expect: dict[str, Any] | None = None) -> Writer:
         """Reopen the dpm run file ``path`` for appending, cut back to its first ``frames``
         frames and ``removed`` removal records (a checkpoint's :meth:`state`): every
         ``/particles``, ``/elements``, ``/frames``, ``/boundaries`` and ``/removed`` dataset
@@ -475,6 +629,13 @@ class Writer:
         same states), so dropping them loses nothing. A file that a killed run left open
         (HDF5 refuses to reopen it for writing) is rebuilt: its kept frames are copied into
         a new file that atomically replaces it.
+
+        One writer per file: a file that a live process writes (or keeps open) is refused
+        with :class:`ParameterError` naming it and the process, before anything is
+        changed. ``expect`` (what a checkpoint recorded of the file, see
+        :func:`identity`: ``fingerprint``, ``frames``, ``last_step``, ``last_time``,
+        ``last_digest``) must match the file: a file that another run replaced is refused
+        by name, not mixed with this run's frames.
         """
         path = Path(path)
         call = f"Writer.resume({str(path)!r})"
@@ -485,8 +646,19 @@ class Writer:
         frames, removed = int(frames), int(removed)
         if not path.is_file():
             raise ParameterError(f"{call}: no such file")
+        claim = _claim(path, call)  # (refuses a file a live process writes)
         try:
-            f = h5py.File(path, "r+", libver="latest")
+            return cls._resume(path, sim, frames, removed, expect, call, claim)
+        except BaseException:
+            if claim is not None:
+                claim.release()
+            raise
+
+    @classmethod
+    def _resume(cls, path: Path, sim: Simulation, frames: int, removed: int,
+                expect: dict[str, Any] | None, call: str, claim: _Claim | None) -> Writer:
+        try:
+            f = _open_rw(path)
             rebuild = False
         except OSError as e:
             if "lock" in str(e).lower():
@@ -503,6 +675,8 @@ class Writer:
             if frames > n:
                 raise ParameterError(f"{call}: the file has {n} complete frame(s); cannot "
                                      f"resume after frame {frames}")
+            if expect:
+                _check_identity(f, path, frames, expect, call)
             n_removed = complete_removed(f)
             if removed > n_removed:
                 raise ParameterError(f"{call}: the file has {n_removed} removal record(s); "
@@ -536,13 +710,16 @@ class Writer:
         finally:
             f.close()
         if rebuild:
-            _rebuild(path, sizes)
+            new = _rebuild(path, sizes, call)  # (the new file is claimed before it is
+            if claim is not None:              # renamed onto the name)
+                claim.release()
+            claim = new
         if not has_thermo:
-            with h5py.File(path, "r+", libver="latest") as f:
+            with _open_rw(path) as f:
                 _thermo_layout(f)
         w = cls.__new__(cls)
         w.path = path
-        w._open()
+        w._open(claim)
         w.clusters = (erows > 0 if sim.plan is None else not sim.plan.spheres_only)
         w.frames, w.rows, w.element_rows, w.removed = frames, rows, erows, removed
         w.thermo_rows = thermo
@@ -754,6 +931,7 @@ class Writer:
         if self.file.id.valid:
             self.flush()
             self.file.close()
+        self._release()
 
 
 class NullWriter:
@@ -806,10 +984,64 @@ def _truncate(f: Any, sizes: dict[str, int]) -> None:
     f.flush()
 
 
-def _rebuild(path: Path, sizes: dict[str, int]) -> None:
+def _frame_digest(f: Any, k: int) -> str:
+    """A digest of frame ``k``'s particle ids and positions (what tells two runs apart)."""
+    fr = f["frames"]
+    a, n = int(fr["start"][k]), int(fr["count"][k])
+    h = hashlib.sha256(np.ascontiguousarray(f["particles/id"][a:a + n]).tobytes())
+    h.update(np.ascontiguousarray(f["particles/position"][a:a + n]).tobytes())
+    return h.hexdigest()[:16]
+
+
+def identity(writer: Any) -> dict[str, Any]:
+    """What identifies the file ``writer`` writes, at its current frame count (stored in
+    a checkpoint, checked by :meth:`Writer.resume`): the file's ``scene_fingerprint``,
+    ``frames``, and the step, time and a digest of the ids and positions of the last
+    frame. Empty for a writer without an open file."""
+    f = getattr(writer, "file", None)
+    if f is None or not f.id.valid:
+        return {}
+    out: dict[str, Any] = {"frames": int(writer.frames),
+                           "fingerprint": _text(f.attrs.get("scene_fingerprint")) or ""}
+    if writer.frames:
+        k = int(writer.frames) - 1
+        out["last_step"] = int(f["frames/step"][k])
+        out["last_time"] = float(f["frames/time"][k])
+        out["last_digest"] = _frame_digest(f, k)
+    return out
+
+
+def _check_identity(f: Any, path: Path, frames: int, expect: dict[str, Any],
+                    call: str) -> None:
+    """Refuse (ParameterError, by name) a file that is not the one ``expect`` describes."""
+    why = ""
+    mine, theirs = _text(f.attrs.get("scene_fingerprint")) or "", expect.get("fingerprint")
+    if mine and theirs and mine != theirs:
+        why = (f"its scene fingerprint is {mine}, the checkpoint's run wrote {theirs} (the "
+               f"file of another scene)")
+    elif frames and "last_step" in expect:
+        k = frames - 1
+        step, time = int(f["frames/step"][k]), float(f["frames/time"][k])
+        if (step, time) != (int(expect["last_step"]), float(expect["last_time"])):
+            why = (f"its frame {k} is at step {step} (t = {time:g} s), the checkpoint's "
+                   f"run wrote it at step {expect['last_step']} (t = "
+                   f"{float(expect['last_time']):g} s)")
+        elif expect.get("last_digest") and _frame_digest(f, k) != expect["last_digest"]:
+            why = (f"its frame {k} holds other particles or positions than the "
+                   f"checkpoint's run wrote")
+    if why:
+        raise ParameterError(f"{call}: the file is not the output of the checkpoint's run: "
+                             f"{why}. Another run replaced it? It is left as it is; restart "
+                             f"with dpm.restart(..., output=None) and write a new file with "
+                             f"sim.output(...)")
+
+
+def _rebuild(path: Path, sizes: dict[str, int], call: str = "Writer.resume()") -> _Claim | None:
     """Copy the file with each group cut to ``sizes`` rows into a new file that atomically
-    replaces it (same attributes, datasets, dtypes, chunks)."""
+    replaces it (same attributes, datasets, dtypes, chunks); returns the claim of the new
+    file (taken before it replaces the old one)."""
     tmp = _temp_beside(path)
+    claim = None
     try:
         with _open(path) as src, h5py.File(tmp, "w", libver="latest") as dst:
             dst.attrs.update(src.attrs)
@@ -832,10 +1064,14 @@ def _rebuild(path: Path, sizes: dict[str, int]) -> None:
                     block = max(_COPY_BLOCK_BYTES // row_bytes, 1)
                     for a in range(0, rows, block):
                         new[a:min(a + block, rows)] = ds[a:min(a + block, rows)]
+        claim = _claim(tmp, call)
         _publish(tmp, path, overwrite=True)
     except BaseException:
         tmp.unlink(missing_ok=True)
+        if claim is not None:
+            claim.release()
         raise
+    return claim
 
 
 class Run:
@@ -1008,7 +1244,7 @@ def _text(value: Any) -> str | None:
 #: metadata read attempts of a SWMR reader. HDF5's default is 100, each failed checksum
 #: followed by a sleep that starts at 1 ns and doubles (H5C__load_entry), so a block that
 #: a killed writer left half-written made a read sleep for ever (seen once in
-#: tests/test_output_safety.py); 30 attempts give a writer racing the reader about a
+#: tests/io/test_output_safety.py); 30 attempts give a writer racing the reader about a
 #: second in all, then the read fails with an error
 READ_ATTEMPTS = 30
 
