@@ -38,7 +38,6 @@ import json
 import os
 import pickle
 import re
-import tempfile
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -267,27 +266,11 @@ def check_directory(base: Path, call: str) -> None:
     """Check when checkpoints are asked for that they can be written beside ``base``: its
     directory exists (or is created here, as ``sim.output()`` does) and takes new files.
     Raises ParameterError naming the parameter, its value and what is allowed."""
-    allowed = "allowed: a file name in a directory that exists (or can be created) and " \
-              "is writable"
-    parent = base.parent
-    above = parent
-    while not above.exists() and above != above.parent:
-        above = above.parent
-    if not above.is_dir():
-        raise ParameterError(f"{call}: path={str(base)!r}: {str(above)!r} is a file, not a "
-                             f"directory; {allowed}")
-    try:
-        parent.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise ParameterError(f"{call}: path={str(base)!r}: its directory {str(parent)!r} "
-                             f"cannot be created ({e.strerror or e}); {allowed}") from None
-    try:
-        fd, probe = tempfile.mkstemp(dir=parent, prefix=f".{base.name}.", suffix=".probe")
-        os.close(fd)
-        os.unlink(probe)
-    except OSError as e:
-        raise ParameterError(f"{call}: path={str(base)!r}: no file can be created in "
-                             f"{str(parent)!r} ({e.strerror or e}); {allowed}") from None
+    from .io.hdf5 import writable_directory
+
+    writable_directory(base, f"{call}: path={str(base)!r}",
+                       "allowed: a file name in a directory that exists (or can be created) "
+                       "and is writable")
 
 
 class Schedule:

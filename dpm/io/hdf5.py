@@ -278,28 +278,33 @@ def check_output_path(path: str | Path, overwrite: bool, call: str = "sim.output
         if not overwrite:
             raise ParameterError(_exists_message(path))
         check_not_written(path, call)  # (overwrite=True: never a file a live run writes)
+    writable_directory(path, f"{call}: cannot write {str(path)!r}")
+
+
+def writable_directory(path: Path, lead: str, allowed: str = "") -> None:
+    """Check that files can be created beside ``path``: its directory exists or is created
+    here, and a file can be created and removed there. Raises ParameterError starting with
+    ``lead`` (the call and the value) and ending with ``allowed``."""
+    tail = f"; {allowed}" if allowed else ""
     parent = path.parent
     above = parent
     while not above.exists() and above != above.parent:
         above = above.parent
     if not above.is_dir():
-        raise ParameterError(f"{call}: cannot write {str(path)!r}: {str(above)!r} is a "
-                             f"file, not a directory")
+        raise ParameterError(f"{lead}: {str(above)!r} is a file, not a directory{tail}")
     try:
         parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
-        raise ParameterError(f"{call}: cannot write {str(path)!r}: its directory "
-                             f"{str(parent)!r} cannot be created "
-                             f"({e.strerror or e})") from None
+        raise ParameterError(f"{lead}: its directory {str(parent)!r} cannot be created "
+                             f"({e.strerror or e}){tail}") from None
     if not parent.is_dir():
-        raise ParameterError(f"{call}: cannot write {str(path)!r}: {str(parent)!r} is not "
-                             f"a directory")
+        raise ParameterError(f"{lead}: {str(parent)!r} is not a directory{tail}")
     try:
         probe = _temp_beside(path, suffix=".probe")
         probe.unlink()
     except OSError as e:
-        raise ParameterError(f"{call}: cannot write {str(path)!r}: no file can be created "
-                             f"in {str(parent)!r} ({e.strerror or e})") from None
+        raise ParameterError(f"{lead}: no file can be created in {str(parent)!r} "
+                             f"({e.strerror or e}){tail}") from None
 
 
 def check_output_fields(fields: Any, call: str = "sim.output()") -> tuple[str, ...]:
