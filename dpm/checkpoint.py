@@ -249,10 +249,16 @@ def numbered(base: Path, step: int) -> Path:
     return base.with_name(f"{base.stem}.{step:0{STEP_DIGITS}d}{base.suffix}")
 
 
+def _numbered_name(base: Path) -> re.Pattern:
+    """The file names of ``base``'s numbered checkpoints (:func:`numbered`); group 1 the
+    step."""
+    return re.compile(re.escape(base.stem) + r"\.(\d{" + str(STEP_DIGITS) + "})"
+                      + re.escape(base.suffix) + "$")
+
+
 def numbered_files(base: Path) -> list[tuple[int, Path]]:
     """(step, path) of the periodic checkpoints of ``base`` on disk, oldest first."""
-    pat = re.compile(re.escape(base.stem) + r"\.(\d{" + str(STEP_DIGITS) + "})"
-                     + re.escape(base.suffix) + "$")
+    pat = _numbered_name(base)
     found = []
     if base.parent.is_dir():
         for p in base.parent.iterdir():
@@ -447,9 +453,7 @@ def _relocated(base: Path, p: Path) -> Path:
     """The base name of the periodic checkpoints of a run restarted from the checkpoint
     ``p`` that is not where it was written: beside ``p``, with the original base name if
     ``p`` is one of its numbered files, else ``p``'s own name."""
-    pat = re.compile(re.escape(base.stem) + r"\.\d{" + str(STEP_DIGITS) + "}"
-                     + re.escape(base.suffix) + "$")
-    return p.parent / base.name if pat.match(p.name) else p
+    return p.parent / base.name if _numbered_name(base).match(p.name) else p
 
 
 def backend_here(backend: Any) -> Any:

@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from ..timestep import smallest_pair
+
 #: a design speed below this fraction of the scene's fall speed gives a warning
 WARN_RATIO = 1.2
 #: points sampled from each inlet region for its highest point
@@ -40,6 +42,11 @@ def _stiffness(law: Any, a: Any, b: Any, meff: float, reff: float, v: float) -> 
     from .base import PairContext
 
     return float(law.normal.stiffness(law, a, b, PairContext(v, meff, reff)))
+
+
+def _reduced(a: float, b: float) -> float:
+    """a b / (a + b): a reduced mass or radius (b infinite: a)."""
+    return a if math.isinf(b) else a * b / (a + b)
 
 
 def fall_height(sim: Any) -> float:
@@ -70,17 +77,6 @@ def fall_height(sim: Any) -> float:
     return max(0.0, max(ends) - min(starts))
 
 
-def _smallest_pair(sim: Any, ia: int, ib: int | None) -> tuple[float, float]:
-    """(m*, R*) of the smallest bodies of materials ia and ib (None: a wall)."""
-    from ..timestep import smallest_pair
-
-    if ib is None:
-        sel = sim.bodies.material == ia
-        return float(sim.bodies.mass[sel].min()), float(
-            sim.elements.radius[sim.elements.material == ia].min())
-    return smallest_pair(sim, ia, ib)
-
-
 def design_speed_warnings(sim: Any) -> list[str]:
     """Sentences, one per law whose explicit ``impact_velocity`` lies below the speed of a
     fall over the scene's height (:func:`fall_height`), with the overlap that fall gives."""
@@ -96,10 +92,7 @@ def design_speed_warnings(sim: Any) -> list[str]:
         if v is None or ia not in present or v_fall <= WARN_RATIO * v:
             continue
         a, b = sim.materials[ia], sim.materials[ib]
-        if ib in present:
-            meff, reff = _smallest_pair(sim, ia, ib)
-        else:
-            meff, reff = _smallest_pair(sim, ia, None)
+        meff, reff = smallest_pair(sim, ia, ib)  # (a material of walls only: infinite)
         rmin = float(sim.elements.radius[sim.elements.material == ia].min())
         kn = _stiffness(law, a, b, meff, reff, v)
         d = v_fall * math.sqrt(meff / kn)
@@ -130,13 +123,10 @@ def overlap_hint(sim: Any, el: int, overlap: float) -> str:
         v = _design_speed(law)
         if v is None or ma != ia:
             continue
-        other = b.material == mb
-        meff = (float(b.mass[k]) if not np.any(other) else
-                float(b.mass[k]) * float(b.mass[other].min())
-                / (float(b.mass[k]) + float(b.mass[other].min())))
-        oth = e.material == mb
-        reff = r if not np.any(oth) else r * float(e.radius[oth].min()) / (
-            r + float(e.radius[oth].min()))
+        # (against the smallest body of the partner material; a wall material: infinite)
+        masses, radii = b.mass[b.material == mb], e.radius[e.material == mb]
+        meff = _reduced(float(b.mass[k]), float(masses.min()) if len(masses) else math.inf)
+        reff = _reduced(r, float(radii.min()) if len(radii) else math.inf)
         kn = _stiffness(law, sim.materials[ma], sim.materials[mb], meff, reff, v)
         speed = overlap * r / math.sqrt(meff / kn)
         if speed > WARN_RATIO * v:
