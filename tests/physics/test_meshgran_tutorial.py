@@ -25,20 +25,23 @@ head-on meetings of falling and rebounding spheres at 6-7 m/s against a spring s
 first step (:mod:`dpm.impact.design_speed`), tested here too.
 """
 
+import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-import dpm
+ROOT = Path(__file__).resolve().parents[2]
+_spec = importlib.util.spec_from_file_location(
+    "meshgran_tutorial", ROOT / "benchmarks" / "meshgran_tutorial.py")
+mt = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(mt)
 
-TUTORIAL = Path("/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/meshGran")
-MESH, FACE = TUTORIAL / "meshes" / "mesh.stl", TUTORIAL / "meshes" / "insertion_face.stl"
-#: LIGGGHTS' counts below z = -0.6 m, three seeds
+#: LIGGGHTS' counts below z = -0.6 m, three seeds (python benchmarks/meshgran_tutorial.py)
 LIGGGHTS = {0.5: (142, 134, 131), 1.0: (476, 472, 473), 2.0: (495, 496, 494)}
 
 pytestmark = [pytest.mark.slow,
-              pytest.mark.skipif(not MESH.exists(), reason="liggghts-doc is not installed")]
+              pytest.mark.skipif(not mt.MESH.exists(), reason="liggghts-doc is not installed")]
 
 
 def band(t: float) -> tuple[int, int]:
@@ -46,28 +49,9 @@ def band(t: float) -> tuple[int, int]:
     return lo - (hi - lo), hi + (hi - lo)
 
 
-def scene(inlet: str, seed: int, threads: int):
-    sim = dpm.Simulation(dt=5e-5, gravity=(0.0, 0.0, -9.81), integrator="velocity_verlet",
-                         sphere_orientation=False, threads=threads)
-    glass = dpm.Material("glass", density=2500.0, young=5e6, poisson=0.45)
-    sim.contact(glass, glass, model="maw_linear_spring", impact_velocity=2.0,
-                restitution=0.7, friction=0.05, tangential_stiffness_ratio=1.0,
-                tangential_restitution=0.7)
-    sim.add_boundary("mesh", material=glass, file=str(MESH), scale=0.001,
-                     rotate=(1, 0, 0, -90), side="both")
-    region = (dpm.MeshFace(file=str(FACE)) if inlet == "stream"
-              else dpm.BoxRegion((0.205, -0.05, -0.025), (0.255, 0.0, 0.005)))
-    sim.add_inlet(region, glass, rate=1000.0, radius=0.005, velocity=(0.0, 0.0, -1.0),
-                  every=0.02, stop=0.5, seed=seed, max_attempts=100,
-                  random_orientation=False)
-    sim.add_outlet(dpm.BoxRegion((-0.01, -0.06, -1.22), (0.51, 0.01, 0.01)),
-                   remove="outside")
-    return sim
-
-
 @pytest.mark.parametrize("inlet,threads", [("stream", 1), ("box", 2)])
 def test_meshgran_tutorial_counts(inlet, threads):
-    sim = scene(inlet, seed=3, threads=threads)
+    sim = mt.scene(inlet, seed=3, threads=threads)
     with pytest.warns(UserWarning, match=r"impact_velocity=2 m/s is below the speed of a "
                                          r"fall over the scene's height \(1.2\d m"):
         sim.run(until=0.02, progress=False)
