@@ -19,7 +19,14 @@ if "NUMBA_THREADING_LAYER" not in _os.environ:
 from ._memory import tune_malloc as _tune_malloc
 from .boundaries import Boundary
 from .checkpoint import restart
-from .errors import DpmError, ParameterError, SceneError, UnknownNameError, UnstableRunError
+from .errors import (
+    DpmError,
+    OutputError,
+    ParameterError,
+    SceneError,
+    UnknownNameError,
+    UnstableRunError,
+)
 from .flow import Inlet, Outlet
 from .hookspecs import hookimpl
 from .impact import ImpactModel
@@ -51,7 +58,7 @@ __all__ = [
     "Oscillation", "Outlet", "ParameterError", "Region", "register", "registry", "restart",
     "Rotation", "SceneError", "Shape", "Simulation", "Translation", "TriangularOscillation",
     "Tumbling", "UnknownNameError", "UnstableRunError", "__version__", "Reciprocating",
-    "Face", "RectangleFace", "DiscFace", "MeshFace", "advise", "is_root", "notice",
+    "OutputError", "Face", "RectangleFace", "DiscFace", "MeshFace", "advise", "is_root", "notice",
 ]
 
 

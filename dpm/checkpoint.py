@@ -45,7 +45,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ._lazy import lazy_module
-from .errors import ParameterError
+from .errors import DpmError, OutputError, ParameterError
+from .io import space
 from .plugins import call_hook
 
 h5py = lazy_module("h5py")
@@ -183,10 +184,8 @@ def _fsync_dir(path: Path) -> None:
 
 
 def write(sim: Simulation, path: str | os.PathLike) -> Path:
-    """Write a checkpoint of ``sim`` to ``path`` atomically; return the path."""
-    from . import __version__
-    from .io.hdf5 import identity
-
+    """Write a checkpoint of ``sim`` to ``path`` atomically; return the path. An I/O
+    error (disk full) raises :class:`OutputError`, the earlier checkpoints intact."""
     path = Path(path)
     if path.is_dir():
         raise ParameterError(f"sim.checkpoint(): path={str(path)!r} is a directory")
@@ -211,35 +210,53 @@ def write(sim: Simulation, path: str | os.PathLike) -> Path:
     description = scene_description(sim)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        with h5py.File(tmp, "w") as f:
-            a = f.attrs
-            a["format"] = FORMAT
-            a["format_version"] = FORMAT_VERSION
-            a["dpm_version"] = __version__
-            a["numpy_version"] = np.__version__
-            a["step"] = sim.step_count
-            a["time"] = sim.time
-            a["dt"] = sim.dt
-            a["bodies"] = len(sim.bodies)
-            a["scene"] = json.dumps(description, sort_keys=True)
-            a["fingerprint"] = fingerprint(description)
-            # where it was written (a copy elsewhere does not continue the run's output)
-            # and what identifies the output file (checked when it is resumed)
-            a["path"] = os.path.realpath(path)
-            a["output"] = json.dumps(identity(sim._writer) if sim._writer is not None
-                                     else {}, sort_keys=True)
-            g = f.create_group("arrays")
-            for name, arr in pickler.arrays.items():
-                g.create_dataset(name, data=arr)
-            f.create_dataset("objects", data=np.frombuffer(buf.getvalue(), np.uint8))
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
+        # (room first: a write failing inside HDF5 leaves a file it cannot close)
+        space.check_room(path, sum(a.nbytes for a in pickler.arrays.values())
+                         + len(buf.getbuffer()))
+        _write_file(sim, path, tmp, pickler, buf, description)
+    except (OSError, RuntimeError) as exc:  # (disk full, quota, a removed directory)
+        if isinstance(exc, DpmError):
+            raise
+        raise OutputError(f"writing the checkpoint {str(path)!r} at step {sim.step_count} "
+                          f"failed: {exc}; nothing was written in its place (the "
+                          "checkpoints written before are intact)") from exc
     finally:
         if tmp.exists():
             tmp.unlink()
     _fsync_dir(path)
     return path
+
+
+def _write_file(sim: Simulation, path: Path, tmp: Path, pickler: Any, buf: io.BytesIO,
+                description: dict[str, Any]) -> None:
+    """The checkpoint into ``tmp``, fsynced and renamed onto ``path``."""
+    from . import __version__
+    from .io.hdf5 import identity
+
+    with h5py.File(tmp, "w") as f:
+        a = f.attrs
+        a["format"] = FORMAT
+        a["format_version"] = FORMAT_VERSION
+        a["dpm_version"] = __version__
+        a["numpy_version"] = np.__version__
+        a["step"] = sim.step_count
+        a["time"] = sim.time
+        a["dt"] = sim.dt
+        a["bodies"] = len(sim.bodies)
+        a["scene"] = json.dumps(description, sort_keys=True)
+        a["fingerprint"] = fingerprint(description)
+        # where it was written (a copy elsewhere does not continue the run's output)
+        # and what identifies the output file (checked when it is resumed)
+        a["path"] = os.path.realpath(path)
+        a["output"] = json.dumps(identity(sim._writer) if sim._writer is not None
+                                 else {}, sort_keys=True)
+        g = f.create_group("arrays")
+        for name, arr in pickler.arrays.items():
+            g.create_dataset(name, data=arr)
+        f.create_dataset("objects", data=np.frombuffer(buf.getvalue(), np.uint8))
+    with open(tmp, "rb+") as fh:
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
 
 
 # ----------------------------------------------------------------- periodic checkpoints
@@ -306,6 +323,21 @@ class Schedule:
         for _, old in numbered_files(self.base)[:-self.keep]:
             old.unlink(missing_ok=True)
         return path
+
+
+def restart_advice(sim: Simulation) -> str:
+    """What a run stopped by an I/O error (:class:`OutputError`) restarts from: the newest
+    periodic checkpoint on disk, or none."""
+    ck = sim._checkpoints
+    files = numbered_files(Path(ck.base)) if ck is not None else []
+    if not files:
+        return (". No checkpoint of this run is on disk: make room and run it again "
+                "(sim.checkpoint_every(...) makes a run restartable)")
+    step, p = files[-1]
+    return (f". Make room (free space, raise the quota or the file-size limit) and restart "
+            f"from the last checkpoint, step "
+            f"{step}: dpm.restart({str(p)!r}) (in the shell: dpm run SCENE --restart "
+            f"{str(p)!r}); it continues the output file from that step")
 
 
 # ----------------------------------------------------------------- restart

@@ -28,3 +28,9 @@ class SceneError(DpmError, ValueError):
 
 class UnstableRunError(DpmError, RuntimeError):
     """The run became unstable (NaN, exploding overlap or energy); frames written so far stay."""
+
+
+class OutputError(DpmError, OSError):
+    """Writing the output or a checkpoint failed (disk full, quota, a removed directory):
+    the run stops; what was written before stays complete and readable, and the message
+    says from which checkpoint the run restarts."""

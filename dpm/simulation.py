@@ -30,7 +30,7 @@ from .backends.base import (
 from .backends.cpu import threading_layer_advice
 from .boundaries.base import Boundary
 from .boundaries.joints import join_pipe_ends
-from .errors import ParameterError
+from .errors import OutputError, ParameterError
 from .flow import Inlet, Outlet
 from .guards import EnergyBook, Escaped, Guards
 from .impact.base import ImpactModel, PairContext
@@ -756,6 +756,7 @@ class Simulation:
         join_pipe_ends(self.boundaries)
         self.walls = BoundaryTable(self.boundaries, lambda m: self._material_index(m, ""),
                                    rmax + self._skin + reach)
+        self.walls.load[:, 6] = [bd.work for bd in self.boundaries]  # (the sums go on)
         spheres = population.spheres_only(self)
         if spheres:  # every body one sphere at its centre: element positions are the bodies'
             population.share_sphere_arrays(self)
@@ -858,7 +859,12 @@ class Simulation:
             advice = threading_layer_advice(threads)
             if advice and not _quiet():
                 print(f"dpm: {advice}", file=sys.stderr, flush=True)
-            self._run(nsteps, progress)
+            try:
+                self._run(nsteps, progress)
+            except OutputError as exc:  # (disk full: the message says how to go on)
+                from .checkpoint import restart_advice
+
+                raise OutputError(f"sim.run(): {exc}{restart_advice(self)}") from exc
         finally:
             numba.set_num_threads(threads_before)
 
@@ -1074,8 +1080,9 @@ class Simulation:
                 bd.record_load(self.time, np.zeros(3), np.zeros(3), bd.velocity,
                                bd.angular_velocity)
                 continue
-            bd.work += float(loads[k, 6])
-            loads[k, 6] = 0.0
+            # (the kernels keep the running sum: one sum whatever the call ends, so a run
+            # with checkpoints or frames equals one without to the last bit)
+            bd.work = float(loads[k, 6])
             f = loads[k, :3].copy()
             # torque about the frame origin o -> about the torque point c
             o = w.frame[k, :3]

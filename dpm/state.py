@@ -430,7 +430,8 @@ class BoundaryTable:
         self.frame = np.tile(IDENTITY_FRAME, (nb, 1))
         self.frame_ref = self.frame[:, :12].copy()
         #: per boundary: force [0:3], torque about the frame origin [3:6] of the last
-        #: step, work done on the particles since it was last collected [6] (J)
+        #: step, work done on the particles since the first step [6] (J; the running sum,
+        #: which ``Boundary.work`` reads)
         self.load = np.zeros((nb, 7))
         #: the search rows of every boundary when on (:meth:`set_enabled` empties a
         #: switched-off boundary's rows: the search then finds none of its primitives)

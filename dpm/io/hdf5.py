@@ -22,20 +22,26 @@ lock of a dead process is released by the system).
 from __future__ import annotations
 
 import errno
+import gc
 import hashlib
 import json
 import os
+import sys
 import tempfile
 import time as _time
+import traceback
 import warnings
 import weakref
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._lazy import lazy_module
-from ..errors import ParameterError
+from ..errors import DpmError, OutputError, ParameterError
+from . import space
 from .contacts import CONTACT_FIELDS, PARTICLE_FIELDS
 from .solids import SOLID_FRAME_FIELDS, solid_rows
 
@@ -541,6 +547,7 @@ def _start_counts(w: Any, sim: Simulation) -> None:
     w.frames = w.rows = w.element_rows = w.removed = w.thermo_rows = 0
     w.contact_rows = w.line_nodes = 0
     w.solids = None
+    w._last_step = None  # (the step of the last complete frame)
 
 
 class Writer:
@@ -613,6 +620,78 @@ class Writer:
             _HELD[claim.key] = weakref.ref(self)
         self._last_xdmf = 0.0
         self._local = None  # the surfaces' local vertices (read at the first frame)
+        self.failed: str | None = None  # (what stopped the writer: it writes no more)
+        # every dataset held open for the writer's life: HDF5 writes a dataset's cached
+        # chunks when its last handle closes, and an I/O error there (disk full) is only
+        # printed by h5py, never raised; held open, they are written by the explicit
+        # flushes, whose errors stop the run before a frame is marked complete
+        self._datasets: list[Any] = []
+        self.file.visititems(lambda _, obj: self._datasets.append(obj)
+                             if isinstance(obj, h5py.Dataset) else None)
+        # (group, bytes per row, bytes per chunk) of each: the room a write may need
+        self._row_sizes = [(ds.name.split("/")[1],
+                            ds.dtype.itemsize * int(np.prod(ds.shape[1:], dtype=np.int64)),
+                            ds.chunks[0] if ds.chunks else 0) for ds in self._datasets]
+
+    def _reserve(self, rows: dict[str, int]) -> None:
+        """Room on disk for a write that appends ``rows[group]`` rows to the datasets of
+        each named group (:func:`dpm.io.space.reserve`: a full disk stops the write before
+        HDF5 writes a byte): the rows and a new chunk of each of those datasets."""
+        need = 0
+        for group, row, chunk in self._row_sizes:
+            if group in rows:
+                need += row * (rows[group] + chunk)
+        space.reserve(self.file.id.get_vfd_handle(), need)
+
+    @contextmanager
+    def _checked(self, what: str) -> Iterator[None]:
+        """Run a write: an I/O error (disk full, quota, a removed directory) stops the
+        writer with :class:`OutputError`, the frames written before complete and readable."""
+        if self.failed is not None:
+            raise OutputError(f"{self.failed} (nothing more is written to this file)")
+        try:
+            yield
+        except DpmError:
+            raise
+        except (OSError, RuntimeError, ValueError) as exc:
+            self._give_up(what, exc)
+
+    def _give_up(self, what: str, exc: BaseException) -> None:
+        n = self.frames
+        kept = (f"it keeps {n} complete frame(s), up to step {self._last_step}, readable "
+                "with dpm.load" if n else "it holds no complete frame")
+        why = " ".join(str(exc).split())  # (h5py's messages span lines)
+        self.failed = (f"{what} to {str(self.path)!r} failed: {why}; the output stopped "
+                       f"there: {kept}")
+        # the file as the last complete frame left it: the frame table cut back (where the
+        # disk still takes that), the handles closed without a word from h5py
+        hook = sys.unraisablehook
+        sys.unraisablehook = lambda _: None
+        try:
+            # (the failed call's frames hold h5py handles: dropped here, not at exit)
+            traceback.clear_frames(exc.__traceback__)
+            try:
+                fr = self.file["frames"]
+                for name in fr:
+                    if fr[name].shape[0] > n:
+                        fr[name].resize(n, axis=0)
+                self.file.flush()
+            except (OSError, RuntimeError, ValueError):
+                pass
+            self._datasets = []
+            gc.collect()
+            try:
+                self.file.close()
+            except (OSError, RuntimeError, ValueError):
+                pass
+            try:  # (the sidecar of the complete frames, where the disk takes it)
+                write_xdmf(self.path)
+            except (OSError, RuntimeError, ValueError, KeyError):
+                pass
+        finally:
+            sys.unraisablehook = hook
+        self._release()
+        raise OutputError(self.failed) from None
 
     def _release(self) -> None:
         """Give the file's lock back (after its HDF5 file is closed)."""
@@ -725,6 +804,7 @@ class Writer:
         w = cls.__new__(cls)
         w.path = path
         w._open(claim)
+        w._last_step = int(w.file["frames/step"][frames - 1]) if frames else None
         w.clusters = (erows > 0 if sim.plan is None else not sim.plan.spheres_only)
         w.frames, w.rows, w.element_rows, w.removed = frames, rows, erows, removed
         w.thermo_rows = thermo
@@ -744,11 +824,20 @@ class Writer:
         return {"frames": self.frames, "removed": self.removed, "path": str(self.path)}
 
     def write(self, sim: Simulation) -> None:
-        """Append the current state as a frame and flush it to disk."""
+        """Append the current state as a frame and flush it to disk (an I/O error raises
+        :class:`OutputError`, and the frame is not counted)."""
+        with self._checked(f"writing frame {self.frames} (step {sim.step_count})"):
+            self._write(sim)
+        self._last_step = sim.step_count
+
+    def _write(self, sim: Simulation) -> None:
         if sim.plan is not None:
             self.clusters = not sim.plan.spheres_only
         b = sim.bodies
         n = len(b)
+        m = len(sim.elements) if self.clusters else 0
+        self._reserve({"particles": n, "elements": m, "frames": 1, "boundaries": 1,
+                       "contacts": 8 * n, "solids": 64 * m})
         g = self.file["particles"]
         for name, (_, _, attr) in FIELDS.items():
             ds = g[name]
@@ -777,7 +866,6 @@ class Writer:
             ds[self.frames] = vals
         if "pose" in bg:
             self._write_surfaces(sim, bg, nb)
-        m = len(sim.elements) if self.clusters else 0
         if m:
             e = sim.elements
             eg = self.file["elements"]
@@ -812,7 +900,7 @@ class Writer:
         self.frames += 1
         now = _time.monotonic()
         if self.frames == 1 or now - self._last_xdmf > XDMF_INTERVAL_S:
-            self.write_xdmf()
+            self._write_xdmf()
             self._last_xdmf = now
 
     def _write_contacts(self, sim: Simulation) -> int:
@@ -858,9 +946,13 @@ class Writer:
 
     def write_removed(self, records: dict[str, np.ndarray], outlet: int) -> None:
         """Append the records of bodies an outlet removed (``id`` extended last)."""
+        if len(records["id"]):
+            with self._checked(f"writing {len(records['id'])} removal record(s)"):
+                self._write_removed(records, outlet)
+
+    def _write_removed(self, records: dict[str, np.ndarray], outlet: int) -> None:
         n = len(records["id"])
-        if n == 0:
-            return
+        self._reserve({"removed": n})
         rg = self.file["removed"]
         values = dict(records, outlet=np.full(n, outlet))
         for name in [k for k in REMOVED_FIELDS if k != "id"] + ["id"]:
@@ -881,6 +973,11 @@ class Writer:
             raise ParameterError(f"Writer.write_thermo(): unknown column(s) "
                                  f"{', '.join(sorted(unknown))}; columns: "
                                  f"{', '.join(THERMO_COLUMNS)}")
+        with self._checked("writing a thermo row"):
+            self._write_thermo(row)
+
+    def _write_thermo(self, row: dict[str, float]) -> None:
+        self._reserve({"thermo": 1})
         g = self.file["thermo"]
         k = self.thermo_rows
         for name in THERMO_COLUMNS[1:] + THERMO_COLUMNS[:1]:
@@ -894,6 +991,10 @@ class Writer:
 
     def write_xdmf(self) -> None:
         """Rewrite the XDMF sidecar(s) for the frames written so far (atomically)."""
+        with self._checked("writing the XDMF sidecar"):
+            self._write_xdmf()
+
+    def _write_xdmf(self) -> None:
         from .xdmf import write_xdmf_from_arrays
 
         fr = self.file["frames"]
@@ -927,15 +1028,20 @@ class Writer:
         return not self.file.id.valid
 
     def flush(self) -> None:
-        if self.file.id.valid:
-            self.file.flush()
-            self.write_xdmf()
+        """Flush the file and rewrite its XDMF sidecar (nothing after a failure: the run
+        stopped with it)."""
+        if self.failed is None and self.file.id.valid:
+            with self._checked("flushing"):
+                self.file.flush()
+                self._write_xdmf()
             self._last_xdmf = _time.monotonic()
 
     def close(self) -> None:
-        if self.file.id.valid:
+        if self.failed is None and self.file.id.valid:
             self.flush()
-            self.file.close()
+            self._datasets = []
+            with self._checked("closing"):
+                self.file.close()
         self._release()
 
 

@@ -345,6 +345,10 @@ class MpiBackend(CpuBackend):
         t_scatter = time.perf_counter() - t_scatter
         inner, loc = self.inner, self.local
         sim = self.sim  # (constants a script may change between runs)
+        if self.rank != 0 and sim.walls is not None and sim.walls.load.size:
+            # the boundaries' running work sum goes on on rank 0 only: the sum over the
+            # ranks at the call's end (:meth:`_sum_loads`) adds every rank's share once
+            sim.walls.load[:, 6] = 0.0
         loc.gravity, loc.max_overlap = sim.gravity, sim.max_overlap
         loc.sphere_orientation = sim.sphere_orientation
         module = self.module
