@@ -2,7 +2,8 @@
 
 ``registry()`` returns the loaded :class:`Registry`; ``lookup(kind, name)`` gives the class
 registered under ``name`` or raises :class:`UnknownNameError` listing what is registered.
-A plugin that fails to import or register is recorded in ``Registry.broken`` (shown by
+A plugin that fails to import or register (an exception, or ``sys.exit()`` or
+``KeyboardInterrupt`` at import) is recorded in ``Registry.broken`` (shown by
 ``dpm plugins``) instead of breaking the others.
 
 Two distributions registering one name of one kind is a conflict: the name stays listed,
@@ -167,6 +168,12 @@ def registry(reload: bool = False) -> Registry:
             reg.register_plugin(ep.load(), source)
         except Exception as exc:  # a broken plugin must not break the others
             reg.broken.append((source, f"{type(exc).__name__}: {exc}"))
+        except SystemExit as exc:  # nor end the program
+            reg.broken.append((source, f"SystemExit: it called sys.exit({exc.code!r}) while "
+                                       "loading"))
+        except KeyboardInterrupt:
+            reg.broken.append((source, "KeyboardInterrupt: it raised KeyboardInterrupt "
+                                       "while loading"))
     if not reg.entries["impact_model"]:
         # running from a source tree without installed metadata: load the built-ins directly
         from . import builtin

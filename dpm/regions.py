@@ -260,6 +260,9 @@ class MeshFace(Face):
         if file is not None:
             import trimesh
 
+            from .boundaries.mesh import check_stl
+
+            check_stl(call, "file", file)
             try:
                 m = trimesh.load(str(file), force="mesh")
             except (OSError, ValueError) as exc:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import difflib
 import re
+import reprlib
 import tomllib
 from collections.abc import Iterable
 from pathlib import Path
@@ -27,6 +28,12 @@ TABLES = ("materials",)
 #: keys a [[particles]] table takes besides its shape's parameters
 PARTICLE_KEYS = ("shape", "material", "csv", "lattice", "positions", "velocities",
                  "angular_velocities", "orientations")
+#: deepest nesting of arrays and inline tables a scene file may have (its own ones: 5)
+MAX_DEPTH = 64
+#: characters of a value a message echoes (a longer one is cut, with its length)
+ECHO = 80
+#: what a [[particles]] table's csv file holds
+CSV_FORM = "comma-separated numbers in columns x,y,z[,vx,vy,vz[,r]] under one header line"
 
 
 def read_scene(path: str | Path) -> dict[str, Any]:
@@ -39,18 +46,58 @@ def read_scene(path: str | Path) -> dict[str, Any]:
     if not path.is_file():
         raise ParameterError(f"{path}: the scene file does not exist"
                              + (" (it is a directory)" if path.is_dir() else ""))
+    too_deep = (f"{path}: arrays or tables nested more than {MAX_DEPTH} deep; allowed: at "
+                f"most {MAX_DEPTH} levels")
     try:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{path}: not valid TOML: {exc}{_line_of(path, exc)}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ParameterError(f"{path}: the scene file could not be read: {exc}") from None
+    except RecursionError:  # tomllib parses nested arrays and inline tables recursively
+        raise ParameterError(too_deep) from None
+    if _depth(doc) > MAX_DEPTH:
+        raise ParameterError(too_deep)
     problems = scene_problems(doc, path.parent)
     if problems:
         lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
         raise ParameterError("\n".join(f"{path}: {m}{_where_in_file(lines, m)}"
                                        for m in problems))
     return doc
+
+
+def _depth(doc: dict[str, Any]) -> int:
+    """The deepest nesting of tables and arrays in a parsed document (without recursion;
+    it stops counting beyond :data:`MAX_DEPTH`)."""
+    deepest = 0
+    stack: list[tuple[Any, int]] = [(doc, 0)]
+    while stack and deepest <= MAX_DEPTH:
+        value, level = stack.pop()
+        if isinstance(value, dict):
+            value = list(value.values())
+        if isinstance(value, list):
+            deepest = max(deepest, level)
+            stack.extend((v, level + 1) for v in value)
+    return deepest
+
+
+# a repr whose first ECHO characters are those of the full one, of bounded length
+_REPR = reprlib.Repr()
+_REPR.maxlevel = ECHO
+_REPR.maxlist = _REPR.maxdict = ECHO // 2
+_REPR.maxstring = _REPR.maxother = 4 * ECHO
+
+
+def echo(value: Any) -> str:
+    """``repr(value)`` for a message, on one line: beyond :data:`ECHO` characters cut
+    there, followed by ``...`` and the value's length (the full repr is never built)."""
+    text = _REPR.repr(value)
+    if len(text) <= ECHO:
+        return text
+    size = (f" ({len(value):,} characters)" if isinstance(value, str)
+            else f" ({len(value):,} item{'s' * (len(value) != 1)})"
+            if isinstance(value, list | dict) else "")
+    return f"{text[:ECHO]}...{size}"
 
 
 _HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z0-9_.\"-]+)\s*\]\]?")
@@ -105,7 +152,7 @@ def _line_of(path: Path, exc: Exception) -> str:
         return ""
     try:
         lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
-        return f"; line {m.group(1)}: {lines[int(m.group(1)) - 1].strip()!r}"
+        return f"; line {m.group(1)}: {echo(lines[int(m.group(1)) - 1].strip())}"
     except (OSError, IndexError):
         return ""
 
@@ -117,7 +164,7 @@ def _unknown(where: str, table: dict, allowed: Iterable[str]) -> list[str]:
         if k not in allowed:
             close = difflib.get_close_matches(k, allowed, n=1)
             hint = f" (did you mean {close[0]}?)" if close else ""
-            out.append(f"{where}: unknown key {k} = {table[k]!r}{hint}; allowed: "
+            out.append(f"{where}: unknown key {k} = {echo(table[k])}{hint}; allowed: "
                        f"{', '.join(allowed)}")
     return out
 
@@ -140,7 +187,7 @@ def _misspelt(where: str, table: dict, base: Iterable[str], kind: str = "") -> l
             continue
         close = difflib.get_close_matches(k, sorted(known), n=1)
         hint = f" (did you mean {close[0]}?)" if close else ""
-        out.append(f"{where}: unknown key {k} = {table[k]!r}{hint}")
+        out.append(f"{where}: unknown key {k} = {echo(table[k])}{hint}")
     return out
 
 
@@ -149,7 +196,7 @@ def _params(kind: str, name: Any, where: str) -> tuple[list[str], list[str]]:
     from .plugins import registry
 
     if not isinstance(name, str):
-        return [], [f"{where}: {name!r} must be a registered {kind.replace('_', ' ')} name"]
+        return [], [f"{where}: {echo(name)} must be a registered {kind.replace('_', ' ')} name"]
     try:
         cls = registry().lookup(kind, name, where)
     except DpmError as exc:
@@ -163,11 +210,11 @@ def _region(where: str, spec: Any) -> list[str]:
     reg = registry()
     names = reg.names("region")
     if not isinstance(spec, dict) or len(spec) != 1 or next(iter(spec)) not in names:
-        return [f"{where}: region = {spec!r} must be one of "
+        return [f"{where}: region = {echo(spec)} must be one of "
                 + ", ".join(f"{{ {n} = {{...}} }}" for n in names)]
     kind, kw = next(iter(spec.items()))
     if not isinstance(kw, dict):
-        return [f"{where}: region.{kind} = {kw!r} must be a table"]
+        return [f"{where}: region.{kind} = {echo(kw)} must be a table"]
     return _unknown(f"{where}: region.{kind}", kw,
                     getattr(reg.lookup("region", kind, where), "parameters", {}))
 
@@ -180,9 +227,22 @@ def _motion(where: str, spec: Any) -> list[str]:
     reg = registry()
     names = reg.names("motion")
     if not isinstance(spec, dict) or spec.get("type") not in names:
-        return [f"{where}: motion = {spec!r} needs type = one of {', '.join(names)}"]
+        return [f"{where}: motion = {echo(spec)} needs type = one of {', '.join(names)}"]
     cls = reg.lookup("motion", spec["type"], where)
     return _unknown(f"{where}: motion", spec, ["type", *getattr(cls, "parameters", {})])
+
+
+def _csv_file(lead: str, file: Path) -> list[str]:
+    """The problem of a [[particles]] table's csv ``file`` (none for a regular file)."""
+    try:
+        if file.is_file():
+            return []
+        if not file.exists():
+            return [f"{lead}: no such file ({file})"]
+        why = f"is not a regular file ({file})"
+    except OSError as exc:  # (a name too long)
+        why = f"cannot be looked up ({exc.strerror})"
+    return [f"{lead} {why}; allowed: a file of {CSV_FORM}"]
 
 
 def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
@@ -236,7 +296,7 @@ def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
             problems += _unknown(where, spec, own)
             mix = spec["shapes"]
             if not (isinstance(mix, list) and all(isinstance(s, dict) for s in mix)):
-                problems.append(f"{where}: shapes = {mix!r} must be a list of tables "
+                problems.append(f"{where}: shapes = {echo(mix)} must be a list of tables "
                                 '{ shape = "name", fraction = f, ... }')
                 continue
             for j, s in enumerate(mix):
@@ -262,14 +322,13 @@ def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
         if isinstance(p.get("lattice"), dict):
             problems += _unknown(f"{where}: lattice", p["lattice"], _LATTICE)
         elif "lattice" in p:
-            problems.append(f"{where}: lattice = {p['lattice']!r} must be a table "
+            problems.append(f"{where}: lattice = {echo(p['lattice'])} must be a table "
                             "{ lower = [...], upper = [...], spacing = ... }")
         if "csv" in p:
             if not isinstance(p["csv"], str):
-                problems.append(f"{where}: csv = {p['csv']!r} must be a file name")
-            elif base is not None and not (base / p["csv"]).is_file():
-                problems.append(f"{where}: csv = {p['csv']!r}: no such file "
-                                f"({base / p['csv']})")
+                problems.append(f"{where}: csv = {echo(p['csv'])} must be a file name")
+            elif base is not None:
+                problems += _csv_file(f"{where}: csv = {echo(p['csv'])}", base / p["csv"])
     if "output" in doc:
         problems += _unknown("[output]", doc["output"],
                              ["path", "every", "every_steps", "overwrite", "fields",

@@ -198,15 +198,39 @@ def _shape(value) -> str:
         return type(value).__name__
 
 
+def check_stl(call: str, name: str, file) -> None:
+    """Refuse, without reading it, a binary STL file whose size is not the 84 + 50 n bytes
+    its header's triangle count n says (ParameterError naming ``name=file``, the count and
+    both sizes); other files, ASCII STL (``solid`` and text at the start) included, pass."""
+    path = Path(str(file))
+    if path.suffix.lower() != ".stl" or not path.is_file():
+        return
+    size = path.stat().st_size
+    with path.open("rb") as f:
+        head = f.read(512)
+    ascii_stl = head.lstrip(b"\xef\xbb\xbf \t\r\n")[:5].lower() == b"solid"
+    if size < 84 or (ascii_stl and b"\0" not in head):
+        return
+    count = int.from_bytes(head[80:84], "little")
+    if size != 84 + 50 * count:
+        raise ParameterError(
+            f"{call}: {name}={str(file)!r} is a binary STL whose header claims {count:,} "
+            f"triangles, {84 + 50 * count:,} bytes, but the file has {size:,} bytes; "
+            "allowed: a binary STL of 84 + 50 x (its triangle count) bytes, or an ASCII "
+            "STL (starting with 'solid')")
+
+
 def load_mesh(call: str, file):
     """Read ``file`` with trimesh as one mesh; ParameterError naming the file and the
-    reason when it is missing, unreadable or holds no triangles."""
+    reason when it is missing, unreadable, a binary STL of the wrong size
+    (:func:`check_stl`) or holds no triangles."""
     import trimesh
 
     path = Path(str(file))
     if not path.is_file():
         raise ParameterError(f"{call}: file={str(file)!r} does not exist"
                              + (" (it is a directory)" if path.is_dir() else ""))
+    check_stl(call, "file", file)
     try:
         tm = trimesh.load(str(path), force="mesh")
     except Exception as exc:  # trimesh raises many kinds

@@ -62,6 +62,8 @@ Layout (every table mirrors a call; keys are the call's keyword arguments)::
 
 from __future__ import annotations
 
+import re
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -69,6 +71,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..material import Material
+from ..scene_file import CSV_FORM, echo
 from ..scene_tools import lattice
 from ..simulation import Simulation
 
@@ -84,7 +87,7 @@ def _motion(where: str, spec: Any) -> Any:
         return mo.Compose(*[_motion(f"{where}[{k}]", s) for k, s in enumerate(spec)])
     names = registry().names("motion")
     if not isinstance(spec, dict) or spec.get("type") not in names:
-        raise ParameterError(f"{where}: motion={spec!r} needs type = one of "
+        raise ParameterError(f"{where}: motion={echo(spec)} needs type = one of "
                              f"{', '.join(names)}")
     kw = {k: (tuple(v) if isinstance(v, list) else v) for k, v in spec.items() if k != "type"}
     return registry().lookup("motion", spec["type"], where)(**kw)
@@ -97,10 +100,35 @@ def _region(where: str, spec: Any) -> Any:
 
     names = registry().names("region")
     if not isinstance(spec, dict) or len(spec) != 1 or next(iter(spec)) not in names:
-        raise ParameterError(f"{where}: region={spec!r} must be one of "
+        raise ParameterError(f"{where}: region={echo(spec)} must be one of "
                              + ", ".join(f"{{ {n} = {{...}} }}" for n in names))
     kind, kw = next(iter(spec.items()))
     return registry().lookup("region", kind, where)(**kw)
+
+
+def _csv(where: str, name: str, base: Path) -> np.ndarray:
+    """The rows of a [[particles]] table's csv file (relative to the scene file's folder
+    ``base``), at least three columns; ParameterError naming the file otherwise."""
+    file = base / name
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # no rows: refused below
+            data = np.loadtxt(file, delimiter=",", skiprows=1, ndmin=2)
+    except (ValueError, OSError) as exc:
+        if isinstance(exc, UnicodeDecodeError):
+            why = f"not UTF-8 text (byte {exc.start} is {exc.object[exc.start]:#04x})"
+        else:  # numpy counts rows after the header from 0 ("could not convert"), or from 1
+            why = str(exc).split("; use `usecols`")[0]
+            row = re.search(r" at row (\d+)", why)
+            if row:
+                n = int(row.group(1)) + ("could not convert" in why)
+                why = f"{why[:row.start()]} in data row {n} under the header"
+        raise ParameterError(f"{where}: csv={name!r} ({file}) could not be read: {why}; "
+                             f"allowed: {CSV_FORM}") from None
+    if data.size == 0 or data.shape[1] < 3:
+        got = f"{data.shape[1]} column(s)" if data.size else "no rows under the header"
+        raise ParameterError(f"{where}: csv={name!r} ({file}) has {got}; allowed: {CSV_FORM}")
+    return data
 
 
 def load_scene(path: str | Path, output: bool = True,
@@ -118,6 +146,10 @@ def load_scene(path: str | Path, output: bool = True,
         doc.pop("output", None)
     elif overwrite is not None and "output" in doc:
         doc["output"] = dict(doc["output"], overwrite=bool(overwrite))
+    target = doc.get("output", {}).get("path", path.with_suffix(".h5").name)
+    if not isinstance(target, str):
+        raise ParameterError(f"{path}: [output]: path={echo(target)}; allowed: a file name "
+                             '(a string: path = "run.h5")')
     unknown = sorted(set(doc) - _TOP)
     if unknown:
         raise ParameterError(f"{path}: unknown table(s) {unknown}; allowed: {sorted(_TOP)}")
@@ -132,7 +164,7 @@ def load_scene(path: str | Path, output: bool = True,
 
     def mat(where: str, name: Any) -> Material:
         if name not in mats:
-            raise ParameterError(f"{path}: {where}: material={name!r} is not defined; "
+            raise ParameterError(f"{path}: {where}: material={echo(name)} is not defined; "
                                  f"defined: {', '.join(mats) or 'none'}")
         return mats[name]
 
@@ -178,8 +210,7 @@ def load_scene(path: str | Path, output: bool = True,
             raise ParameterError(f"{path}: particles[{k}]: give exactly one of csv, lattice, "
                                  f"positions (got {sources or 'none'})")
         if "csv" in p:
-            data = np.atleast_2d(np.loadtxt(path.parent / p.pop("csv"), delimiter=",",
-                                            skiprows=1))
+            data = _csv(f"{path}: particles[{k}]", p.pop("csv"), path.parent)
             p["positions"] = data[:, :3]
             if data.shape[1] >= 6 and "velocities" not in p:
                 p["velocities"] = data[:, 3:6]
@@ -191,5 +222,5 @@ def load_scene(path: str | Path, output: bool = True,
     if "output" in doc:
         out = dict(doc["output"])
         # inputs (csv) are relative to the scene file, the output to the working directory
-        sim.output(str(out.pop("path", path.with_suffix(".h5").name)), **out)
+        sim.output(out.pop("path", path.with_suffix(".h5").name), **out)
     return sim, dict(doc.get("run", {}))

@@ -71,6 +71,10 @@ MAX_ELEMENTS = 20_000
 WALK_STEPS = 48
 #: voxel budget of the coarse grid that finds the deepest point
 COARSE_VOXELS = 40_000
+#: most cells a voxel grid may have (a solid much thinner than long needs a fine grid over
+#: its whole box), and the bytes a cell costs (the grid, its distance transform's arrays)
+MAX_GRID_CELLS = 8_000_000
+BYTES_PER_GRID_CELL = 50
 #: clustered shapes remembered by :func:`built_shape` (the most recently built)
 BUILT_MAX = 256
 _BUILT: OrderedDict[str, ClusterShape] = OrderedDict()
@@ -200,7 +204,7 @@ class ClusterShape(Shape):
             lo, hi = np.asarray(lo, float), np.asarray(hi, float)
             h = (float(np.prod(hi - lo)) / COARSE_VOXELS) ** (1.0 / 3.0)
             h = min(h, float(np.min(hi - lo)) / 8.0)
-            axes = _grid_axes(lo, hi, h, self.grid_jitter)
+            axes = _grid_axes(self, lo, hi, h, "largest inscribed sphere")
             inside = self.inside_grid(*axes)
             if not inside.any():
                 raise ParameterError(f"{self.call}: the solid is too thin for the voxel grid")
@@ -300,17 +304,26 @@ def _fmt_param(v: Any) -> str:
     return repr(v) if isinstance(v, str) else str(v)
 
 
-def _grid_axes(lo: np.ndarray, hi: np.ndarray, h: float,
-               jitter: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _grid_axes(shape: ClusterShape, lo: np.ndarray, hi: np.ndarray, h: float,
+               purpose: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The axes of a voxel grid of spacing ``h`` over the box [lo, hi] of ``shape``;
+    ParameterError, before anything is allocated, beyond :data:`MAX_GRID_CELLS` cells."""
     mid = 0.5 * (np.asarray(lo) + np.asarray(hi))
     ext = np.asarray(hi) - np.asarray(lo)
     shift = (np.array([math.sqrt(2), math.sqrt(3), math.sqrt(5)]) - 1.0) * 1e-3 * h \
-        if jitter else np.zeros(3)
-    out = []
-    for k in range(3):
-        n = 2 * int(math.ceil(ext[k] / (2 * h))) + 3
-        out.append(mid[k] + shift[k] + (np.arange(n) - (n - 1) / 2) * h)
-    return out[0], out[1], out[2]
+        if shape.grid_jitter else np.zeros(3)
+    counts = [2 * int(math.ceil(ext[k] / (2 * h))) + 3 for k in range(3)]
+    cells = math.prod(counts)
+    if cells > MAX_GRID_CELLS:
+        raise ParameterError(
+            f"{shape.call}: {shape.describe()} needs a voxel grid of {cells:,} cells "
+            f"({' x '.join(map(str, counts))}, about {cells * BYTES_PER_GRID_CELL / 1e9:.3g} "
+            f"GB) for its {purpose}; allowed: at most {MAX_GRID_CELLS:,} cells "
+            f"({MAX_GRID_CELLS * BYTES_PER_GRID_CELL / 1e6:.0f} MB): a less slender solid "
+            "(its thinnest part sets the grid spacing)")
+    xs, ys, zs = (mid[k] + shift[k] + (np.arange(n) - (n - 1) / 2) * h
+                  for k, n in enumerate(counts))
+    return xs, ys, zs
 
 
 def generate_cluster(shape: ClusterShape, resolution: float) -> Cluster:
@@ -431,7 +444,7 @@ def _fill_interior(shape: ClusterShape, r_in: float, threshold: float,
     lo, hi = shape.bounds()
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     h = max(r_in / 10.0, (float(np.prod(hi - lo)) / 200_000) ** (1.0 / 3.0))
-    xs, ys, zs = _grid_axes(lo, hi, h, shape.grid_jitter)
+    xs, ys, zs = _grid_axes(shape, lo, hi, h, "interior fill")
     inside = shape.inside_grid(xs, ys, zs)
     d_est = ndimage.distance_transform_edt(inside, sampling=h) - 0.5 * h
     covered = np.zeros(inside.shape, dtype=bool)

@@ -58,6 +58,9 @@ class MeshShape(ClusterShape):
     def _load(self) -> trimesh.Trimesh:
         p = self.params
         if p["path"] is not None:
+            from ..boundaries.mesh import check_stl
+
+            check_stl(self.call, "path", p["path"])
             try:
                 m = trimesh.load(str(p["path"]), force="mesh")
             except (OSError, ValueError) as exc:

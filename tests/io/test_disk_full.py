@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_output_ownership import small_scene
 
 import dpm
 from dpm import checkpoint as ckpt
-from test_output_ownership import small_scene
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "disk_full.py"
 STEPS = 600
