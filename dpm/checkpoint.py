@@ -9,19 +9,18 @@ schedule and plugin state (the ``dpm_on_checkpoint`` hook). :func:`restart` in a
 process continues the trajectory of the uninterrupted run bit for bit (with the same dpm,
 numpy and numba; results do not depend on the thread count).
 
-The file is HDF5 (layout in ``docs/reliability.md``): the attributes say what it is
-(``format``, ``format_version``, ``dpm_version``, ``step``, ``time``, the scene's
-``fingerprint`` and ``scene`` description); ``/arrays/aN`` hold the numpy arrays of the
-state; ``/objects`` is the pickled object graph of the simulation (protocol 5) in which
-each of those arrays is a reference ``aN`` (so large state is stored as plain datasets,
-readable with h5py, and arrays shared between containers stay shared). A checkpoint is
-written to a temporary file beside the target, flushed to disk (fsync), then renamed
-onto it: a run killed at any moment leaves the previous checkpoint intact.
-
-Restoring unpickles the object graph: classes are found by their module and name, so a
-scene built from classes defined in a script restarts from that script (``__main__``),
-and a checkpoint is only as trustworthy as its origin. Load only checkpoints you trust: a
-checkpoint is a pickle, loading it can run code.
+The file is HDF5 (layout in ``docs/reliability.md``) and holds plain data only: the
+attributes say what it is (``format``, ``format_version``, ``dpm_version``, ``step``,
+``time``, the scene's ``fingerprint`` and ``scene`` description); ``/state`` is the object
+graph of the simulation as JSON text (:mod:`dpm.io.state_tree`: containers, numbers, the
+classes of its objects by name and their attributes) in which each large numpy array is a
+reference to a dataset ``/arrays/aN`` (readable with h5py; arrays shared between
+containers stay shared). Loading one runs no code from the file: it builds only objects
+of dpm's classes, of registered plugins and of the running script, through ``__new__`` and
+their stored attributes; a scene holding anything else (a lambda, an object of another
+library) is refused by name at ``sim.checkpoint_every()``. A checkpoint is written to a
+temporary file beside the target, flushed to disk (fsync), then renamed onto it: a run
+killed at any moment leaves the previous checkpoint intact.
 
 A checkpoint also records where it was written (attribute ``path``) and what identifies
 the output file at that moment (attribute ``output``, JSON: the file's scene fingerprint,
@@ -33,10 +32,8 @@ when asked, ``output="continue"``), and only if the file is still that run's fil
 from __future__ import annotations
 
 import hashlib
-import io
 import json
 import os
-import pickle
 import re
 import warnings
 from pathlib import Path
@@ -46,7 +43,7 @@ import numpy as np
 
 from ._lazy import lazy_module
 from .errors import DpmError, OutputError, ParameterError
-from .io import space
+from .io import space, state_tree
 from .plugins import call_hook
 
 h5py = lazy_module("h5py")
@@ -55,9 +52,8 @@ if TYPE_CHECKING:
     from .simulation import Simulation
 
 FORMAT = "dpm-checkpoint"
-FORMAT_VERSION = 1
-#: arrays with fewer items stay inside the pickled object graph
-MIN_DATASET = 32
+#: 2: plain data (version 1 pickled the simulation, which loading could run code from)
+FORMAT_VERSION = 2
 #: digits of the step number in the names of periodic checkpoints
 STEP_DIGITS = 10
 
@@ -137,39 +133,6 @@ def _difference(a: Any, b: Any, where: str = "") -> str:
     return "" if a == b else f"{where.rstrip('.')}: {a!r} in the checkpoint, {b!r} in the scene"
 
 
-# ----------------------------------------------------------------- pickling with datasets
-class _Pickler(pickle.Pickler):
-    def __init__(self, file: io.BytesIO) -> None:
-        super().__init__(file, protocol=5)
-        self.names: dict[int, str] = {}
-        self.arrays: dict[str, np.ndarray] = {}
-
-    def persistent_id(self, obj: Any) -> str | None:
-        if (type(obj) is np.ndarray and obj.dtype.kind in "biuf"
-                and obj.size >= MIN_DATASET):
-            name = self.names.get(id(obj))
-            if name is None:
-                name = f"a{len(self.arrays)}"
-                self.names[id(obj)] = name
-                self.arrays[name] = obj  # (holds the array: its id stays unique)
-            return name
-        return None
-
-
-class _Unpickler(pickle.Unpickler):
-    def __init__(self, file: io.BytesIO, group: Any) -> None:
-        super().__init__(file)
-        self.group = group
-        self.loaded: dict[str, np.ndarray] = {}
-
-    def persistent_load(self, pid: str) -> np.ndarray:
-        arr = self.loaded.get(pid)
-        if arr is None:
-            arr = np.ascontiguousarray(self.group[pid][()])
-            self.loaded[pid] = arr
-        return arr
-
-
 def _fsync_dir(path: Path) -> None:
     try:
         fd = os.open(path.parent, os.O_RDONLY)
@@ -199,21 +162,17 @@ def write(sim: Simulation, path: str | os.PathLike) -> Path:
     state: dict[str, Any] = {}
     call_hook(sim._registry, "dpm_on_checkpoint", sim=sim, state=state)
     sim._plugin_state = state
-    buf = io.BytesIO()
-    pickler = _Pickler(buf)
-    try:
-        pickler.dump(sim)
-    except (pickle.PicklingError, TypeError, AttributeError) as exc:
-        raise ParameterError(f"sim.checkpoint(): the scene holds an object that cannot be "
-                             f"stored ({exc}); objects of the scene (motions, laws, plugin "
-                             "classes) must be picklable, defined at module level") from None
+    tree, arrays = state_tree.encode(sim, "sim.checkpoint()")
+    text = json.dumps(tree, separators=(",", ":")).encode()
     description = scene_description(sim)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    from .io.hdf5 import _temp_beside, clean_stale_temps
+
+    clean_stale_temps(path.parent)  # (those of a killed run's checkpoints)
+    tmp = _temp_beside(path)
     try:
         # (room first: a write failing inside HDF5 leaves a file it cannot close)
-        space.check_room(path, sum(a.nbytes for a in pickler.arrays.values())
-                         + len(buf.getbuffer()))
-        _write_file(sim, path, tmp, pickler, buf, description)
+        space.check_room(path, sum(a.nbytes for a in arrays.values()) + len(text))
+        _write_file(sim, path, tmp, arrays, text, description)
     except (OSError, RuntimeError) as exc:  # (disk full, quota, a removed directory)
         if isinstance(exc, DpmError):
             raise
@@ -227,8 +186,8 @@ def write(sim: Simulation, path: str | os.PathLike) -> Path:
     return path
 
 
-def _write_file(sim: Simulation, path: Path, tmp: Path, pickler: Any, buf: io.BytesIO,
-                description: dict[str, Any]) -> None:
+def _write_file(sim: Simulation, path: Path, tmp: Path, arrays: dict[str, np.ndarray],
+                text: bytes, description: dict[str, Any]) -> None:
     """The checkpoint into ``tmp``, fsynced and renamed onto ``path``."""
     from . import __version__
     from .io.hdf5 import identity
@@ -251,9 +210,9 @@ def _write_file(sim: Simulation, path: Path, tmp: Path, pickler: Any, buf: io.By
         a["output"] = json.dumps(identity(sim._writer) if sim._writer is not None
                                  else {}, sort_keys=True)
         g = f.create_group("arrays")
-        for name, arr in pickler.arrays.items():
+        for name, arr in arrays.items():
             g.create_dataset(name, data=arr)
-        f.create_dataset("objects", data=np.frombuffer(buf.getvalue(), np.uint8))
+        f.create_dataset("state", data=np.frombuffer(text, np.uint8))
     with open(tmp, "rb+") as fh:
         os.fsync(fh.fileno())
     os.replace(tmp, path)
@@ -374,7 +333,10 @@ def restart(path: str | os.PathLike, scene: Simulation | None = None,
     """The simulation stored in the checkpoint at ``path`` (or the newest numbered one
     beside it), ready to run on: ``sim.run(...)`` continues the trajectory bit for bit.
 
-    Load only checkpoints you trust: a checkpoint is a pickle, loading it can run code.
+    Loading runs no code from the file (:mod:`dpm.io.state_tree`): a checkpoint naming a
+    class or function that is not dpm's, a registered plugin's or the running script's is
+    refused by name; a script's own classes (a motion, a law) are found in the running
+    script, so a scene built from a script restarts from that script.
 
     A checkpoint of another dpm version or format is refused with the reason. With
     ``scene`` (the same scene built again, by a script or a TOML file) the checkpoint must
@@ -406,10 +368,13 @@ def restart(path: str | os.PathLike, scene: Simulation | None = None,
                              "'continue', None or the path of the run's output file")
     p = latest(path)
     attrs = read_attrs(p)
-    if int(attrs.get("format_version", -1)) != FORMAT_VERSION:
+    version = attrs.get("format_version", -1)
+    if version != FORMAT_VERSION:
+        old = (" (version 1 pickled the simulation, and loading it could run code from the "
+               "file: it is not read; run the scene again from its script)"
+               if version == 1 else "")
         raise ParameterError(f"dpm.restart(): {str(p)!r} has checkpoint format version "
-                             f"{attrs.get('format_version')}; this dpm reads version "
-                             f"{FORMAT_VERSION}")
+                             f"{version}; this dpm reads version {FORMAT_VERSION}{old}")
     if attrs.get("dpm_version") != __version__:
         raise ParameterError(f"dpm.restart(): {str(p)!r} was written by dpm "
                              f"{attrs.get('dpm_version')}, this is dpm {__version__}: "
@@ -420,18 +385,98 @@ def restart(path: str | os.PathLike, scene: Simulation | None = None,
             theirs = json.loads(attrs["scene"])
             raise ParameterError(f"dpm.restart(): {str(p)!r} is a checkpoint of another "
                                  f"scene; first difference: {_difference(theirs, mine)}")
-    with h5py.File(p, "r") as f:
-        blob = f["objects"][()].tobytes()
-        try:
-            sim = _Unpickler(io.BytesIO(blob), f["arrays"]).load()
-        except (AttributeError, ModuleNotFoundError, ImportError) as exc:
-            raise ParameterError(
-                f"dpm.restart(): {str(p)!r} needs a class this process does not have "
-                f"({exc}); restart from the script (or with the plugin) that built the "
-                "scene") from None
+    sim = _load_state(p)
     sim.backend = backend_here(sim.backend)
     _choose_output(sim, p, attrs, output)
     sim._restored(p)
+    return sim
+
+
+#: run settings a scene file may change on restart (they set no state of the scene)
+CHANGEABLE = ("dt", "max_overlap", "dt_check", "skin")
+#: settings a restart keeps: a change is refused by name
+FIXED = ("sphere_orientation", "_overlap_tolerance")
+
+
+def apply_scene_settings(sim: Simulation, scene: Simulation, source: str) -> list[str]:
+    """After ``dpm run SCENE --restart``: the run settings of ``scene`` (the scene file
+    built again) that differ from the restored ``sim``'s take effect (dt, max_overlap,
+    dt_check, skin, the thread count, the output's interval; a new output path starts a
+    new file); returns a line for each. A setting a restart cannot change (orientation
+    tracking, the overlap tolerance, the backend, the output's fields in the file being
+    continued) is refused by name (ParameterError), before any step. Changes of the scene
+    itself (materials, laws, boundaries, gravity, integrator) are refused by
+    :func:`restart`'s fingerprint check."""
+    call = f"dpm run {source} --restart"
+    for name in FIXED:
+        a, b = getattr(sim, name), getattr(scene, name)
+        if a != b:
+            raise ParameterError(f"{call}: [simulation] {name.lstrip('_')}={b!r} in the "
+                                 f"scene file, {a!r} in the checkpoint; a restart cannot "
+                                 "change it (it changes the state's meaning): set it back")
+    if type(scene.backend).__name__ != type(sim.backend).__name__ and not (
+            {type(scene.backend).__name__, type(sim.backend).__name__}
+            <= {"CpuBackend", "MpiBackend"}):
+        raise ParameterError(f"{call}: [simulation] device: {type(scene.backend).__name__} "
+                             f"in the scene file, {type(sim.backend).__name__} in the "
+                             "checkpoint; a restart goes on with the checkpoint's backend")
+    said = []
+    for name in CHANGEABLE:
+        a, b = getattr(sim, name), getattr(scene, name)
+        if a != b:
+            setattr(sim, name, b)  # (each setter checks, as between runs)
+            said.append(f"{name}: {a!r} -> {b!r} (from {source})")
+    threads = getattr(scene.backend, "threads", None)
+    if threads != getattr(sim.backend, "threads", None):
+        said.append(f"threads: {sim.backend.threads!r} -> {threads!r} (from {source})")
+        sim.backend.threads = threads
+    return said + _apply_output(sim, scene, source)
+
+
+def _apply_output(sim: Simulation, scene: Simulation, source: str) -> list[str]:
+    """The scene file's [output] against the restored run's: the same leaves the output
+    as the checkpoint has it (frames at the same steps); another interval takes effect
+    from here; another path starts that file (the run's own file is left as it is)."""
+    path = scene._output_path
+    if path is None:
+        return []
+    every, every_steps = scene._output_every_s, scene._output_every
+    layout = dict(fields=scene._output_fields, contacts=scene._output_contacts,
+                  solids=scene._output_solids)
+    same_path = (sim._output_path is not None
+                 and os.path.realpath(sim._output_path) == os.path.realpath(path))
+    same = (same_path and (every, every_steps if every is None else None)
+            == (sim._output_every_s, sim._output_every if sim._output_every_s is None
+                else None)
+            and layout == dict(fields=sim._output_fields, contacts=sim._output_contacts,
+                               solids=sim._output_solids))
+    if same:
+        return []
+    interval = {"every": every} if every is not None else {"every_steps": every_steps}
+    sim.output(path, **interval, overwrite=scene._output_overwrite, **layout)
+    what = f"every={every!r} s" if every is not None else f"every_steps={every_steps!r}"
+    return [f"output: {path} {what}, {'continued' if same_path else 'a new file'} "
+            f"(from {source})"]
+
+
+def _load_state(p: Path) -> Simulation:
+    """The simulation of the checkpoint ``p`` from its plain data (no code of the file)."""
+    from .simulation import Simulation
+
+    where = f"dpm.restart({str(p)!r})"
+    with h5py.File(p, "r") as f:
+        if "state" not in f or "arrays" not in f:
+            raise ParameterError(f"{where}: the checkpoint has no /state or /arrays (a "
+                                 "damaged or edited file)")
+        try:
+            tree = json.loads(f["state"][()].tobytes())
+        except (ValueError, RecursionError) as exc:
+            raise ParameterError(f"{where}: /state is not the JSON text of a state "
+                                 f"({type(exc).__name__})") from None
+        sim = state_tree.decode(tree, f["arrays"], where)
+    if type(sim) is not Simulation:
+        raise ParameterError(f"{where}: the stored state is a {type(sim).__name__}, not a "
+                             "Simulation")
     return sim
 
 

@@ -23,12 +23,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .io.scene import load_scene
 
     if args.restart is not None:
-        # the scene as the file describes it, to check that the checkpoint is of it
-        scene, run_kw = load_scene(args.scene, output=False)
-        from .checkpoint import restart
+        # the scene as the file describes it: the checkpoint must be of it, and the run
+        # settings it changes (dt, max_overlap, output interval, ...) take effect
+        scene, run_kw = load_scene(args.scene, output=True, create_output=False)
+        from .checkpoint import apply_scene_settings, restart
 
         sim = restart(args.restart, scene=scene)
+        changed = apply_scene_settings(sim, scene, args.scene)
         say(f"restarted from step {sim.step_count} (t = {sim.time:.6g} s)")
+        for line in changed:
+            say(f"  {line}")
     else:
         try:
             sim, run_kw = load_scene(args.scene, overwrite=True if args.overwrite else None)
@@ -212,8 +216,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="replace an existing output file (it is kept otherwise)")
     r.add_argument("--restart", metavar="CHECKPOINT", default=None,
                    help="go on from a checkpoint of this scene (a file, or the base name of "
-                   "numbered ones: the newest). Load only checkpoints you trust: a "
-                   "checkpoint is a pickle, loading it can run code. The run's output file "
+                   "numbered ones: the newest). A checkpoint is plain data: loading it "
+                   "runs no code from the file. The run's output file "
                    "is continued only from a checkpoint where its run wrote it; a copy "
                    "restarted elsewhere leaves the original's files alone and writes no "
                    "output)")

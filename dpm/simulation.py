@@ -1112,7 +1112,11 @@ class Simulation:
         """Write checkpoints during the runs every ``every`` seconds of simulated time
         (or ``every_steps`` steps) to numbered files beside ``path`` (``run.ckpt.h5`` ->
         ``run.ckpt.0000012000.h5``, the step number), keeping the last ``keep``.
-        ``dpm.restart(path)`` takes the newest. ``path=None`` stops them."""
+        ``dpm.restart(path)`` takes the newest. ``path=None`` stops them.
+
+        A checkpoint is plain data (:mod:`dpm.checkpoint`): a scene object it cannot store
+        (a lambda, a function defined inside a function, an object of another library) is
+        refused here, by where it sits (``sim.boundaries[1].motion.profile``)."""
         from . import checkpoint as _ckpt
 
         if path is None:
@@ -1135,6 +1139,9 @@ class Simulation:
         base = Path(path)
         if base.is_dir():
             raise ParameterError(f"sim.checkpoint_every(): path={str(path)!r} is a directory")
+        from .io.state_tree import encode
+
+        encode(self, "sim.checkpoint_every()")  # (what a checkpoint cannot store: refused now)
         self._checkpoints = _ckpt.Schedule(base, None if every is None else float(every),
                                            None if every_steps is None else int(every_steps),
                                            int(keep), self.step_count,

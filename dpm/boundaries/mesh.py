@@ -145,7 +145,9 @@ class Mesh(Boundary):
         if p["side"] in ("inside", "outside") and not tm.is_watertight:
             raise ParameterError(f"{call}: side={p['side']!r} needs a closed (watertight) "
                                  "mesh; this one has open edges (use side='both')")
-        self.trimesh = tm
+        self._trimesh = tm
+        # (the cleaned mesh in its own frame: what a checkpoint keeps of it, plain arrays)
+        self._mesh = (np.array(tm.vertices, float), np.array(tm.faces, np.int64))
         self.rotation = rotation_matrix(call, p["rotate"])
         self.vertices = (np.asarray(tm.vertices, float) * float(p["scale"])) @ self.rotation.T \
             + np.asarray(p["translate"], float)
@@ -158,6 +160,22 @@ class Mesh(Boundary):
                          else "outside" if tm.volume > 0 else "inside")
         elif self.side == "both":
             self.side = None
+
+    @property
+    def trimesh(self) -> Any:
+        """The cleaned mesh (merged vertices, degenerate faces dropped) as a trimesh, in
+        its own frame (before scale, rotate, translate)."""
+        tm = self.__dict__.get("_trimesh")
+        if tm is None:  # (restored from a checkpoint: built again from its arrays)
+            import trimesh
+
+            tm = self._trimesh = trimesh.Trimesh(*self._mesh, process=False)
+        return tm
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state.pop("_trimesh", None)
+        return state
 
     def outside(self, position: np.ndarray, radius: np.ndarray) -> np.ndarray:
         """Particles whose centre lies on the wrong side of a closed mesh (see ``side``);

@@ -240,8 +240,8 @@ class LawSpec(tuple):
         obj.layout = Layout(parts)
         return obj
 
-    def __reduce__(self) -> tuple:  # (pickled in checkpoints: a tuple subclass)
-        return (LawSpec, (self[0], self[1], self.parts))
+    def __getnewargs__(self) -> tuple:  # (stored in checkpoints: a tuple subclass)
+        return (self[0], self[1], self.parts)
 
     def key(self) -> tuple:
         return (tuple(self), tuple(p.key() for p in self.parts))

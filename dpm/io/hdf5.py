@@ -26,6 +26,8 @@ import gc
 import hashlib
 import json
 import os
+import re
+import socket
 import sys
 import tempfile
 import time as _time
@@ -95,6 +97,9 @@ THERMO_COLUMNS = ("time", "step", "particles", "kinetic_energy", "contacts", "ma
 #: the XDMF sidecar is rewritten after a frame when the last write is older than this [s]
 #: (and after the first frame, at every flush and at close)
 XDMF_INTERVAL_S = 5.0
+#: a scene file's text up to this size [bytes] is stored in every output file; a larger
+#: one by its path and SHA-256 (``scene_sha256``)
+SCENE_TEXT_MAX = 1 << 20
 #: datasets a resume keeps whole (not rows of frames)
 _UNCUT = frozenset({"line_nodes"})
 #: rows copied at a time when a file is rebuilt (:meth:`Writer.resume`)
@@ -115,9 +120,11 @@ def _fsync(path: Path, directory: bool = False) -> None:
 
 
 def _temp_beside(path: Path, suffix: str = ".tmp") -> Path:
-    """A new empty file in the directory of ``path`` (hidden, unique name), with the mode
+    """A new empty file in the directory of ``path`` (hidden, unique name naming this host
+    and process, so that :func:`clean_stale_temps` knows a dead writer's), with the mode
     a plain new file would get (mkstemp's is 0600)."""
-    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.{_HOST}.{os.getpid()}.",
+                                suffix=suffix)
     try:
         os.fchmod(fd, 0o666 & ~_umask())
     except (AttributeError, OSError):
@@ -125,6 +132,41 @@ def _temp_beside(path: Path, suffix: str = ".tmp") -> Path:
     finally:
         os.close(fd)
     return Path(name)
+
+
+_HOST = socket.gethostname().replace("/", "_") or "host"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, OSError):
+        return True
+    return True
+
+
+def clean_stale_temps(directory: Path) -> list[Path]:
+    """Remove the temporary files in ``directory`` that writers of this host left when
+    they were killed (:func:`_temp_beside`'s names: the process is gone); returns them.
+    Those of live processes and of other hosts (a shared file system) are left."""
+    pattern = re.compile(r"^\..+\." + re.escape(_HOST) + r"\.(\d+)\.[^/]*(tmp|probe)$")
+    gone = []
+    try:
+        names = os.listdir(directory)
+    except OSError:
+        return gone
+    for name in names:
+        m = pattern.match(name)
+        if m and int(m.group(1)) != os.getpid() and not _alive(int(m.group(1))):
+            p = Path(directory) / name
+            try:
+                p.unlink()
+                gone.append(p)
+            except OSError:
+                pass
+    return gone
 
 
 def _umask() -> int:
@@ -358,7 +400,12 @@ def _scene_attrs(f: Any, sim: Simulation) -> None:
     f.attrs["scene_fingerprint"] = fingerprint(description)
     source = getattr(sim, "_scene_source", None)
     if source is not None:
-        f.attrs["scene_file"], f.attrs["scene_toml"] = str(source[0]), str(source[1])
+        f.attrs["scene_file"] = str(source[0])
+        text = str(source[1])
+        if len(text.encode()) <= SCENE_TEXT_MAX:
+            f.attrs["scene_toml"] = text
+        else:  # (a scene file with its data inline: its path and digest, not a copy)
+            f.attrs["scene_sha256"] = hashlib.sha256(text.encode()).hexdigest()
 
 
 def _layout(f: Any, sim: Simulation, fields: tuple[str, ...] = (),
@@ -580,6 +627,7 @@ class Writer:
         if not overwrite and self.path.exists():
             raise ParameterError(_exists_message(self.path))
         self._claim = None
+        clean_stale_temps(self.path.parent)
         # overwrite: the file it replaces must not be one a live process writes (held
         # until the new file is in its place)
         old = _claim(self.path, "sim.output()") if self.path.is_file() else None
@@ -731,6 +779,7 @@ class Writer:
         if not path.is_file():
             raise ParameterError(f"{call}: no such file")
         claim = _claim(path, call)  # (refuses a file a live process writes)
+        clean_stale_temps(path.parent)
         try:
             return cls._resume(path, sim, frames, removed, expect, call, claim)
         except BaseException:
@@ -1196,7 +1245,7 @@ class Run:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
-        with _open(self.path) as f:
+        with _open_run(self.path) as f:
             self.attrs: dict[str, Any] = dict(f.attrs)
             n, self._rows, self._element_rows = complete_frames(f)
             self._contacts = "contacts" in f
@@ -1322,7 +1371,9 @@ class Run:
     @property
     def scene_toml(self) -> str | None:
         """The text of the TOML scene file of the run (``dpm run scene.toml``); None for a
-        scene built in Python or a file written before dpm stored it."""
+        scene built in Python, a file written before dpm stored it, or a scene file over
+        :data:`SCENE_TEXT_MAX` bytes (stored by path and its SHA-256, attribute
+        ``scene_sha256``)."""
         return _text(self.attrs.get("scene_toml"))
 
     @property
@@ -1387,6 +1438,28 @@ def _swmr_read_fapl() -> Any:
 
 
 _FAPL: Any = None
+
+
+def _open_run(path: Path, call: str = "dpm.load") -> h5py.File:
+    """A dpm run file opened for reading; ParameterError naming it when it is missing, not
+    HDF5, or another kind of HDF5 file (a checkpoint)."""
+    if not path.is_file():
+        raise ParameterError(f"{call}({str(path)!r}): "
+                             f"{'not a file' if path.exists() else 'no such file'}")
+    try:
+        f = _open(path)
+    except OSError as exc:
+        raise ParameterError(f"{call}({str(path)!r}): not an HDF5 file that can be read "
+                             f"({' '.join(str(exc).split())})") from None
+    fmt = f.attrs.get("format")
+    fmt = fmt.decode() if isinstance(fmt, bytes) else fmt
+    if fmt == "dpm-checkpoint" or fmt != FORMAT or "frames" not in f:
+        f.close()
+        what = ("a dpm checkpoint: dpm.restart() continues it" if fmt == "dpm-checkpoint"
+                else f"an HDF5 file of another kind (format attribute {fmt!r})")
+        raise ParameterError(f"{call}({str(path)!r}): the file is {what}; {call} reads the "
+                             "output of sim.output() (a run file)")
+    return f
 
 
 def _open(path: Path) -> h5py.File:

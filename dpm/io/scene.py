@@ -131,13 +131,15 @@ def _csv(where: str, name: str, base: Path) -> np.ndarray:
     return data
 
 
-def load_scene(path: str | Path, output: bool = True,
-               overwrite: bool | None = None) -> tuple[Simulation, dict[str, Any]]:
+def load_scene(path: str | Path, output: bool = True, overwrite: bool | None = None,
+               create_output: bool = True) -> tuple[Simulation, dict[str, Any]]:
     """Build the Simulation a TOML scene describes; return it and the ``[run]`` arguments.
 
     The file, its tables and their keys are checked first (:func:`dpm.scene_file.read_scene`).
     ``output=False`` leaves the ``[output]`` table out (a restart goes on writing the file
-    of the checkpoint); ``overwrite`` (when not None) overrides its ``overwrite`` key."""
+    of the checkpoint); ``overwrite`` (when not None) overrides its ``overwrite`` key.
+    ``create_output=False`` records the ``[output]`` settings without the checks of a file
+    to create (``dpm run --restart`` compares them with the checkpoint's run)."""
     from ..scene_file import read_scene
 
     path = Path(path)
@@ -222,5 +224,9 @@ def load_scene(path: str | Path, output: bool = True,
     if "output" in doc:
         out = dict(doc["output"])
         # inputs (csv) are relative to the scene file, the output to the working directory
-        sim.output(out.pop("path", path.with_suffix(".h5").name), **out)
+        keep = out.pop("overwrite", False)
+        sim.output(out.pop("path", path.with_suffix(".h5").name),
+                   overwrite=keep if create_output else True, **out)
+        if not create_output:
+            sim._output_overwrite = bool(keep)
     return sim, dict(doc.get("run", {}))

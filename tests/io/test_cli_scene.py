@@ -191,3 +191,49 @@ def test_cli_checkpoints_and_restart(tmp_path, monkeypatch, capsys):
     assert main(["run", str(scene), "--steps", "10", "--no-progress"]) == 2
     assert "dpm run --overwrite" in capsys.readouterr().err
     assert main(["run", str(scene), "--steps", "10", "--no-progress", "--overwrite"]) == 0
+
+
+def test_cli_restart_takes_the_edited_run_settings(tmp_path, monkeypatch, capsys):
+    """Issue #55, item 5: dpm run --restart with an edited [simulation] and [output]: dt,
+    max_overlap and the output interval take effect and are reported (the frames after
+    the restart are at the new dt's times); a setting a restart cannot change is refused
+    by name before any step."""
+    monkeypatch.chdir(tmp_path)
+    scene = EXAMPLES / "box_settle.toml"
+    assert main(["run", str(scene), "--steps", "200", "--checkpoint-every", "0.001",
+                 "--no-progress"]) == 0
+    capsys.readouterr()
+    edited = tmp_path / "edited.toml"
+    edited.write_text(scene.read_text().replace("dt = 1e-5", "dt = 5e-6\nmax_overlap = 0.4")
+                      .replace("every = 0.01", "every = 0.0005"))
+    assert main(["run", str(edited), "--steps", "300", "--restart", "box_settle.ckpt.h5",
+                 "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "dt: 1e-05 -> 5e-06" in out and "max_overlap: 0.5 -> 0.4" in out, out
+    assert "output: box_settle_toml.h5 every=0.0005 s, continued" in out, out
+    run = dpm.load(tmp_path / "box_settle_toml.h5")
+    # frame 0 (every 0.01 s before), then every 0.0005 s = 100 steps of 5e-6 s from 200
+    assert run.steps.tolist() == [0, 300]
+    assert run.times[-1] == pytest.approx(200 * 1e-5 + 100 * 5e-6)
+    bad = tmp_path / "bad.toml"
+    bad.write_text(scene.read_text().replace("dt = 1e-5", "dt = 1e-5\nsphere_orientation = false"))
+    assert main(["run", str(bad), "--steps", "300", "--restart", "box_settle.ckpt.h5",
+                 "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "sphere_orientation=False in the scene file, True in the checkpoint" in err, err
+
+
+def test_a_large_scene_file_is_stored_by_digest(tmp_path, monkeypatch):
+    """Issue #55, item 11: a scene file over 1 MiB is not copied into the output file: its
+    path and SHA-256 are."""
+    import hashlib
+
+    monkeypatch.chdir(tmp_path)
+    big = tmp_path / "big.toml"
+    text = (EXAMPLES / "box_settle.toml").read_text() + "# " + "x" * (1 << 20) + "\n"
+    big.write_text(text)
+    assert main(["run", str(big), "--steps", "1", "--no-progress"]) == 0
+    run = dpm.load(tmp_path / "box_settle_toml.h5")
+    assert run.scene_toml is None and run.scene_file == str(big)
+    assert run.attrs["scene_sha256"] == hashlib.sha256(text.encode()).hexdigest()
+    assert (tmp_path / "box_settle_toml.h5").stat().st_size < (1 << 20)

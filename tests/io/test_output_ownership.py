@@ -1,8 +1,9 @@
 """One owner per output file, and restart never touches a file it was not told to (issue
-#55, items 1, 2, 4, 7 and 9): a second writer of a file that a live process writes is
+#55, items 1, 2, 4 and 9): a second writer of a file that a live process writes is
 refused naming it; a copied checkpoint restarted elsewhere leaves the original run's files
 bit-identical; a file that another run replaced is refused on resume; checkpoint_every()
-checks its directory at the call; loading a checkpoint is documented to run code.
+checks its directory at the call (item 7, plain-data checkpoints:
+tests/io/test_plain_checkpoints.py).
 
 The scene is the small box of tests/io/test_checkpoint.py (same law, boundary and
 integrator: the compiled step module is reused), with fewer spheres.
@@ -187,13 +188,22 @@ def test_checkpoint_every_checks_its_directory_at_the_call(tmp_path):
     assert (tmp_path / "new").is_dir() and list((tmp_path / "new").iterdir()) == []
 
 
-# ----------------------------------------------------------------- 7. the pickle warning
-def test_loading_a_checkpoint_is_documented_to_run_code(capsys):
-    warning = "load only checkpoints you trust: a checkpoint is a pickle, loading it can " \
-              "run code"
-    assert warning in " ".join(dpm.restart.__doc__.split()).lower()
-    from dpm.cli import main
+# ----------------------------------------------------------------- 11. stale temporaries
+def test_temporary_files_of_dead_writers_are_cleaned(tmp_path):
+    """Temporary files that killed writers left (output, sidecar, checkpoint) are removed
+    by the next writer in that directory; those of a live process are left."""
+    from dpm.io.hdf5 import _HOST
 
-    with pytest.raises(SystemExit):
-        main(["run", "--help"])
-    assert warning in " ".join(capsys.readouterr().out.split()).lower()
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    pid = int(dead.stdout)
+    stale = [tmp_path / f".run.h5.{_HOST}.{pid}.k2j4.tmp",
+             tmp_path / f".run.xdmf.{_HOST}.{pid}.a8x1.tmp",
+             tmp_path / f".run.ckpt.0000000020.h5.{_HOST}.{pid}.q0w9.tmp"]
+    live = tmp_path / f".run.h5.{_HOST}.{os.getppid()}.zz11.tmp"
+    other_host = tmp_path / f".run.h5.elsewhere.{pid}.zz12.tmp"
+    for p in (*stale, live, other_host):
+        p.write_bytes(b"x" * 100)
+    first_run(tmp_path, steps=20)
+    assert not any(p.exists() for p in stale)
+    assert live.exists() and other_host.exists()
