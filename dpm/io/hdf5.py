@@ -43,7 +43,7 @@ import numpy as np
 
 from .._lazy import lazy_module
 from ..errors import DpmError, OutputError, ParameterError
-from . import space
+from . import repair, space
 from .contacts import CONTACT_FIELDS, PARTICLE_FIELDS
 from .solids import SOLID_FRAME_FIELDS, solid_rows
 
@@ -759,8 +759,10 @@ class Writer:
 
         The frames after a checkpoint are the ones the restarted run writes again (the
         same states), so dropping them loses nothing. A file that a killed run left open
-        (HDF5 refuses to reopen it for writing) is rebuilt: its kept frames are copied into
-        a new file that atomically replaces it.
+        (HDF5 refuses to reopen it for writing) is repaired in place
+        (:func:`dpm.io.repair.clear_status_flags`, as ``h5clear -s``) and cut back; one
+        that cannot be repaired is rebuilt: its kept frames are copied into a new file
+        that atomically replaces it.
 
         One writer per file: a file that a live process writes (or keeps open) is refused
         with :class:`ParameterError` naming it and the process, before anything is
@@ -797,6 +799,16 @@ class Writer:
             if "lock" in str(e).lower():
                 raise ParameterError(f"{call}: the file is open in another process (a run "
                                      f"still writing it?): {e}") from None
+            f = None
+            if claim is not None and repair.clear_status_flags(path):
+                # left open by a killed run (we hold its lock: no live writer): repaired
+                # in place, as h5clear -s does, instead of copied
+                try:
+                    f = _open_rw(path)
+                    rebuild = False
+                except OSError:
+                    f = None
+        if f is None:
             try:  # left open for SWMR writing by a killed run, or not HDF5 at all
                 f = _open(path)
             except OSError as e2:

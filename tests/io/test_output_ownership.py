@@ -207,3 +207,42 @@ def test_temporary_files_of_dead_writers_are_cleaned(tmp_path):
     first_run(tmp_path, steps=20)
     assert not any(p.exists() for p in stale)
     assert live.exists() and other_host.exists()
+
+
+# ----------------------------------------------------------------- repair in place
+KILLED_RUN = textwrap.dedent("""
+    import os, signal, sys
+    sys.path.insert(0, {here!r})
+    from test_output_ownership import small_scene
+    sim = small_scene()
+    sim.output(sys.argv[1] + "/run.h5", every_steps=10)
+    sim.checkpoint_every(sys.argv[1] + "/run.ckpt.h5", every_steps=20, keep=2)
+    sim.run(steps=45, progress=False)
+    os.kill(os.getpid(), signal.SIGKILL)
+""")
+
+
+def test_a_killed_runs_file_is_repaired_in_place(tmp_path):
+    """A run killed with its output open for writing: the restart clears HDF5's "open for
+    writing" flags in place (h5clear -s) instead of copying the file (same inode), and the
+    run ends with every frame equal to the uninterrupted run's."""
+    p = subprocess.run([sys.executable, "-c", KILLED_RUN.format(here=str(HERE)),
+                        str(tmp_path)], capture_output=True, text=True, check=False)
+    assert p.returncode == -9, p.stderr
+    out = tmp_path / "run.h5"
+    assert open(out, "rb").read(12)[11] != 0  # (left marked open for writing)
+    inode = os.stat(out).st_ino
+    sim = dpm.restart(tmp_path / "run.ckpt.h5")
+    assert sim.step_count == 40
+    assert os.stat(out).st_ino == inode  # not copied
+    sim.run(steps=20, progress=False)
+    sim.close()
+    ref = small_scene()
+    ref.output(tmp_path / "ref.h5", every_steps=10)
+    ref.run(steps=60, progress=False)
+    ref.close()
+    a, b = dpm.load(out), dpm.load(tmp_path / "ref.h5")
+    assert a.n_frames == b.n_frames == 7
+    for k in range(7):
+        for name, value in b.frame(k).items():
+            np.testing.assert_array_equal(a.frame(k)[name], value)
