@@ -19,6 +19,7 @@ if "NUMBA_THREADING_LAYER" not in _os.environ:
 from ._memory import tune_malloc as _tune_malloc
 from .boundaries import Boundary
 from .checkpoint import restart
+from .distributions import LogNormal, Normal, Sieve
 from .errors import (
     DpmError,
     OutputError,
@@ -42,6 +43,7 @@ from .motion import (
     TriangularOscillation,
     Tumbling,
 )
+from .operations import Callback, Operation, Periodic, Trigger
 from .parallel import is_root, notice
 from .plugins import register, registry
 from .reciprocating import Reciprocating
@@ -58,7 +60,9 @@ __all__ = [
     "Oscillation", "Outlet", "ParameterError", "Region", "register", "registry", "restart",
     "Rotation", "SceneError", "Shape", "Simulation", "Translation", "TriangularOscillation",
     "Tumbling", "UnknownNameError", "UnstableRunError", "__version__", "Reciprocating",
-    "OutputError", "Face", "RectangleFace", "DiscFace", "MeshFace", "advise", "is_root", "notice",
+    "OutputError", "Callback", "Operation", "Periodic", "Trigger",
+    "Face", "RectangleFace", "DiscFace", "MeshFace", "advise", "is_root", "notice",
+    "Normal", "LogNormal", "Sieve",
 ]
 
 

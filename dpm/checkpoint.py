@@ -44,6 +44,7 @@ import numpy as np
 from ._lazy import lazy_module
 from .errors import DpmError, OutputError, ParameterError
 from .io import space, state_tree
+from .operations import Operation
 from .plugins import call_hook
 
 h5py = lazy_module("h5py")
@@ -101,7 +102,9 @@ def scene_description(sim: Simulation) -> dict[str, Any]:
                         "params": _plain(bd.params), "motion": _plain(bd.motion)}
                        for bd in sim.boundaries],
         "inlets": [{"region": _plain(i.region), "material": i.material.name,
-                    "shapes": _plain(i.shapes), "rate": i.rate, "mass_rate": i.mass_rate}
+                    "shapes": _plain(i.shapes), "rate": _plain(i.rate),
+                    "mass_rate": _plain(i.mass_rate), "count": i.count,
+                    "mass": _plain(i.mass)}
                    for i in sim.inlets],
         "outlets": [{"region": _plain(o.region), "remove": o.remove} for o in sim.outlets],
         "period": _plain(np.asarray(sim.period)),
@@ -153,8 +156,8 @@ def write(sim: Simulation, path: str | os.PathLike) -> Path:
     if path.is_dir():
         raise ParameterError(f"sim.checkpoint(): path={str(path)!r} is a directory")
     # (MPI: the ranks' state into the host first; every rank calls this)
-    getattr(sim.backend, "sync_host", lambda: None)()
-    if not getattr(sim.backend, "root", True):
+    sim.backend.sync_host()
+    if not sim.backend.root:
         return path  # (MPI: every rank holds the whole state; rank 0 writes it)
     path.parent.mkdir(parents=True, exist_ok=True)
     if sim._writer is not None:
@@ -255,10 +258,13 @@ def check_directory(base: Path, call: str) -> None:
                        "and is writable")
 
 
-class Schedule:
+class Schedule(Operation):
     """Periodic checkpoints of a run (:meth:`dpm.Simulation.checkpoint_every`): every
     ``every`` seconds (kept in seconds when dt changes) or ``every_steps`` steps, to
-    numbered files beside ``base``, keeping the last ``keep``."""
+    numbered files beside ``base``, keeping the last ``keep``. An operation of the run
+    loop (:mod:`dpm.operations`), after the others due at the same step."""
+
+    order = 50
 
     def __init__(self, base: Path, every: float | None, every_steps: int | None,
                  keep: int, step: int, dt: float) -> None:
@@ -267,17 +273,24 @@ class Schedule:
         self.every = every
         self.every_steps = every_steps
         self.keep = keep
-        self.next_step = step + self.interval(dt)
+        #: the step of the next checkpoint
+        self.next = step + self.interval(dt)
 
     def interval(self, dt: float) -> int:
         if self.every_steps is not None:
             return int(self.every_steps)
         return max(1, round(self.every / dt))
 
+    def next_step(self, sim: Simulation) -> int | None:
+        return self.next
+
+    def run(self, sim: Simulation) -> None:
+        self.write(sim)
+
     def write(self, sim: Simulation) -> Path:
-        self.next_step = sim.step_count + self.interval(sim.dt)  # (stored as the next one)
+        self.next = sim.step_count + self.interval(sim.dt)  # (stored as the next one)
         path = write(sim, numbered(self.base, sim.step_count))
-        if not getattr(sim.backend, "root", True):
+        if not sim.backend.root:
             return path
         for _, old in numbered_files(self.base)[:-self.keep]:
             old.unlink(missing_ok=True)
@@ -287,7 +300,7 @@ class Schedule:
 def restart_advice(sim: Simulation) -> str:
     """What a run stopped by an I/O error (:class:`OutputError`) restarts from: the newest
     periodic checkpoint on disk, or none."""
-    ck = sim._checkpoints
+    ck = sim.operations.checkpoints
     files = numbered_files(Path(ck.base)) if ck is not None else []
     if not files:
         return (". No checkpoint of this run is on disk: make room and run it again "
@@ -427,7 +440,7 @@ def apply_scene_settings(sim: Simulation, scene: Simulation, source: str) -> lis
             setattr(sim, name, b)  # (each setter checks, as between runs)
             said.append(f"{name}: {a!r} -> {b!r} (from {source})")
     threads = getattr(scene.backend, "threads", None)
-    if threads != getattr(sim.backend, "threads", None):
+    if threads != sim.backend.threads:
         said.append(f"threads: {sim.backend.threads!r} -> {threads!r} (from {source})")
         sim.backend.threads = threads
     return said + _apply_output(sim, scene, source)
@@ -440,14 +453,14 @@ def _apply_output(sim: Simulation, scene: Simulation, source: str) -> list[str]:
     path = scene._output_path
     if path is None:
         return []
-    every, every_steps = scene._output_every_s, scene._output_every
+    mine, theirs = scene.operations.frames, sim.operations.frames
+    every, every_steps = mine.every_s, mine.every
     layout = dict(fields=scene._output_fields, contacts=scene._output_contacts,
                   solids=scene._output_solids)
     same_path = (sim._output_path is not None
                  and os.path.realpath(sim._output_path) == os.path.realpath(path))
     same = (same_path and (every, every_steps if every is None else None)
-            == (sim._output_every_s, sim._output_every if sim._output_every_s is None
-                else None)
+            == (theirs.every_s, theirs.every if theirs.every_s is None else None)
             and layout == dict(fields=sim._output_fields, contacts=sim._output_contacts,
                                solids=sim._output_solids))
     if same:
@@ -499,7 +512,7 @@ def _choose_output(sim: Simulation, p: Path, attrs: dict[str, Any],
     expect = json.loads(text) if text else None
     keyword = output if isinstance(output, str) and output in ("auto", "continue") else None
     if moved and keyword != "continue":
-        ck = getattr(sim, "_checkpoints", None)
+        ck = sim.operations.checkpoints
         if ck is not None:  # periodic checkpoints beside this copy, not the original's
             ck.base = _relocated(Path(ck.base), p)
     if keyword == "continue" or (keyword == "auto" and not moved):
@@ -566,7 +579,7 @@ def resume_output(sim: Simulation, state: dict[str, Any] | None) -> None:
                       "a new one is written from the restart on", stacklevel=3)
         sim._writer = None
         return
-    if not getattr(sim.backend, "root", True):  # (MPI: rank 0 writes the file)
+    if not sim.backend.root:  # (MPI: rank 0 writes the file)
         from .io.hdf5 import NullWriter
 
         sim._writer = NullWriter(path, sim)

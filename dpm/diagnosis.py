@@ -86,7 +86,7 @@ def locate(sim: Any, el: int) -> str:
 def unstable(sim: Any, what: str) -> UnstableRunError:
     """The error of an unstable run, with the time-step figures; the output is flushed
     and closed first, so every frame written so far stays readable."""
-    getattr(sim.backend, "sync_host", lambda: None)()  # (the failing state, on the host)
+    sim.backend.sync_host()  # (the failing state, on the host)
     rep = sim.time_step_report() if np.all(np.isfinite(sim.bodies.velocity)) else None
     hint = ""
     if rep is not None and rep.contact_time is not None:
@@ -121,8 +121,8 @@ def failure_checkpoint(sim: Any) -> str:
     from pathlib import Path
 
     base = None
-    if sim._checkpoints is not None:
-        base = sim._checkpoints.base
+    if sim.operations.checkpoints is not None:
+        base = sim.operations.checkpoints.base
     elif sim._writer is not None:
         base = Path(sim._writer.path)
     if base is None:

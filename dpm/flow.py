@@ -4,8 +4,9 @@ Both act at events every ``every`` seconds of simulated time (the run's kernel c
 at these events). An :class:`Outlet` removes the bodies whose centre lies inside (or
 outside) its region and records id, time, mass, residence time (time since insertion),
 position and velocity; with output on, the records go to ``/removed`` of the HDF5 file.
-An :class:`Inlet` inserts bodies drawn from a size distribution and shape mix at a number
-or mass rate into its region, at random places where they overlap neither other bodies
+An :class:`Inlet` inserts bodies drawn from a size distribution (a range, or
+:mod:`dpm.distributions`) and shape mix at a number or mass rate, up to a total count or
+mass if given, into its region, at random places where they overlap neither other bodies
 (bounding spheres) nor boundaries; what it cannot place is carried to the next event and
 counted in ``missed`` when the inlet stops.
 
@@ -28,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from .distributions import SizeDistribution, from_table, is_distribution_table
 from .errors import ParameterError
 from .material import Material
 from .parameters import Parameter, numeric_array, validate
@@ -91,12 +93,24 @@ class Inlet:
     """Inserts bodies of ``material`` into ``region`` at ``rate`` bodies/s or
     ``mass_rate`` kg/s from ``start`` to ``stop`` [s], every ``every`` seconds.
 
+    ``count`` (bodies) or ``mass`` (kg) is the total the inlet inserts; then it stops
+    (``inlet.finished``). With ``rate`` or ``mass_rate`` it sets how fast; alone, everything
+    is due at ``start`` (``rate``, or ``mass_rate`` for ``mass``, is then inf: the first event
+    inserts all that fits, later events the rest). ``count`` bodies exactly; ``mass``: bodies
+    until their mass reaches it (the last one crosses it, as ``mass_rate`` does). Refused by
+    name: ``count`` with ``mass``; a ``stop`` before a total in the rate's own unit is due
+    (``count`` with ``rate``, ``mass`` with ``mass_rate``); any finite ``stop`` with a total in
+    the other unit (``count`` with ``mass_rate``, ``mass`` with ``rate``: the time it takes
+    depends on the sizes drawn) or with a total alone.
+
     ``shapes`` is the mix: a list of dicts ``{"shape": name, "fraction": f, **params}``
     (number fractions, normalised); a parameter given as a pair ``(low, high)`` is drawn
-    uniformly per body (e.g. ``"radius": (4e-3, 6e-3)``). Without ``shapes``, ``shape``
-    and the remaining keyword arguments give a single kind. New bodies start with
-    ``velocity`` and random orientation (``random_orientation=True``, the default).
-    ``seed`` makes the insertion reproducible.
+    uniformly per body (e.g. ``"radius": (4e-3, 6e-3)``), one given as a size distribution
+    (:class:`dpm.Normal`, :class:`dpm.LogNormal`, :class:`dpm.Sieve`, or the same as a
+    one-key dict ``{"normal": {...}}``: :mod:`dpm.distributions`) is drawn from it. Without
+    ``shapes``, ``shape`` and the remaining keyword arguments give a single kind. New bodies
+    start with ``velocity`` and random orientation (``random_orientation=True``, the
+    default). ``seed`` makes the insertion reproducible.
 
     With a :class:`~dpm.regions.Face` as ``region`` the inlet streams through the face
     (LIGGGHTS' ``insert/stream``; the module docstring): ``velocity`` must cross it
@@ -119,13 +133,20 @@ class Inlet:
         "seed": Parameter(default=0, low=0, kind="int"),
         "random_orientation": Parameter(default=True, kind="bool"),
         "max_attempts": Parameter(default=30, low=1, kind="int"),
+        "count": Parameter(default=None, low=1, kind="int", doc="bodies in all"),
+        "mass": Parameter(default=None, low=0.0, low_open=True, unit="kg",
+                          doc="mass in all"),
     }
+    #: the totals (set per inlet; the defaults for inlets stored before they existed)
+    count: int | None = None
+    mass: float | None = None
 
     def __init__(self, region: Region, material: Material, rate: float | None = None,
                  mass_rate: float | None = None, shapes: Sequence[Mapping] | None = None,
                  shape: str = "sphere", velocity: Sequence[float] = (0.0, 0.0, 0.0),
                  start: float = 0.0, stop: float = math.inf, every: float = 1e-3,
                  seed: int = 0, random_orientation: bool = True, max_attempts: int = 30,
+                 count: int | None = None, mass: float | None = None,
                  **shape_params: Any) -> None:
         call = "Inlet()"
         if not isinstance(region, Region):
@@ -136,12 +157,16 @@ class Inlet:
         validate(call, self.parameters, dict(
             rate=rate, mass_rate=mass_rate, shape=shape, velocity=velocity, start=start,
             stop=stop, every=every, seed=seed, random_orientation=random_orientation,
-            max_attempts=max_attempts))
-        if (rate is None) == (mass_rate is None):
+            max_attempts=max_attempts, count=count, mass=mass))
+        if rate is not None and mass_rate is not None or (
+                rate is None and mass_rate is None and count is None and mass is None):
             raise ParameterError(f"{call}: give exactly one of rate (1/s) or mass_rate (kg/s)"
-                                 f" (got rate={rate!r}, mass_rate={mass_rate!r})")
+                                 f", or a total alone (count or mass: all due at start) (got "
+                                 f"rate={rate!r}, mass_rate={mass_rate!r})")
         if not stop > start:
             raise ParameterError(f"{call}: stop={stop!r} must be after start={start!r} [s]")
+        rate, mass_rate = _totals(call, rate, mass_rate, count, mass, float(start),
+                                  float(stop))
         if shapes is None:
             shapes = [{"shape": shape, "fraction": 1.0, **shape_params}]
         elif shape_params:
@@ -151,6 +176,7 @@ class Inlet:
               or not all(isinstance(sp, Mapping) for sp in shapes)):
             raise ParameterError(f"{call}: shapes={shapes!r} must be a list of dicts "
                                  '{"shape": name, "fraction": f, **parameters}')
+        shapes = [_with_distributions(call, k, sp) for k, sp in enumerate(shapes)]
         fraction = Parameter(default=1.0, low=0.0)
         problems = [f"{call}: shapes[{k}] {m}" for k, sp in enumerate(shapes)
                     for m in fraction.problems("fraction", sp.get("fraction", 1.0))]
@@ -187,6 +213,9 @@ class Inlet:
         self.every = float(every)
         self.random_orientation = random_orientation
         self.max_attempts = int(max_attempts)
+        self.count = None if count is None else int(count)
+        self.mass = None if mass is None else float(mass)
+        self._check_mass_scaling(call)
         self.rng = np.random.default_rng(seed)
         self.inserted = 0
         self.inserted_mass = 0.0
@@ -249,10 +278,42 @@ class Inlet:
         :meth:`smallest_radius`)."""
         return max(self._bounding_radii())
 
+    def _check_mass_scaling(self, call: str) -> None:
+        """A mass-based size distribution (a sieve table, a log-normal on a mass basis)
+        honours mass fractions by weighting with size^3: the parameter it is given to must
+        scale the whole body. Each shape's body is built at the distribution's two ends
+        (the other parameters at their low ends) and refused, naming the parameter, unless
+        the masses are in the ratio (high / low)^3 to 1e-4."""
+        for k, ((cls, low, _), spec) in enumerate(zip(self.resolved, self.shapes,
+                                                      strict=True)):
+            for key, v in spec.items():
+                if not (isinstance(v, SizeDistribution) and v.by_mass):
+                    continue
+                m = [float(cls(call=call, **dict(low, **{key: end}))
+                           .build(1, self.material.density).mass[0]) for end in (v.low, v.high)]
+                want = (v.high / v.low) ** 3
+                if not abs(m[1] / m[0] / want - 1.0) <= 1e-4:
+                    raise ParameterError(
+                        f"{call}: shapes[{k}] {key}={v!r}: a mass-based distribution needs a "
+                        f"parameter that scales the whole body (mass ~ size^3), but the "
+                        f"{spec.get('shape', 'sphere')!r} body's mass changes by "
+                        f"{m[1] / m[0]:.4g} from {key}={v.low:g} to {v.high:g}, not "
+                        f"{want:.4g}; give it to a size that scales the body (a sphere's "
+                        "radius, a mesh's scale) or use a number distribution")
+
+    @property
+    def finished(self) -> bool:
+        """Whether the inlet has inserted its ``count`` or ``mass``."""
+        return ((self.count is not None and self.inserted >= self.count)
+                or (self.mass is not None and self.inserted_mass >= self.mass))
+
     def candidates(self, radius: float) -> np.ndarray:
         """``max_attempts`` random places for a body of bounding radius ``radius``: in the
         region, or (a face) in the slab behind it at depth radius to radius +
-        ``extrude_length``."""
+        ``extrude_length``. An inlet that has inserted its ``count`` or ``mass`` offers none
+        (the body drawn is not placed: an event ends there, as when the region is full)."""
+        if self.finished:
+            return np.zeros((0, 3))
         pts = self.region.sample(self.rng, self.max_attempts, radius)
         if not self.stream:
             return pts
@@ -324,16 +385,25 @@ class Inlet:
         The total due is computed from the time since ``start`` in one product, never
         summed interval by interval (a sum of 1000 intervals of 1e-3 s at 500/s ends at
         499.99...: one body short); a count within 1e-9 of a whole number is that number.
+        It is at most ``count`` (or ``mass``) in all; nothing once the inlet is
+        :attr:`finished`.
         """
+        if self.finished:
+            return 0.0
         t1 = min(t, self.stop)
         total = 0.0
         if t1 > self.start:
             total = (self.rate or self.mass_rate) * (t1 - self.start)
         if self.mass_rate is not None:
+            if self.mass is not None:
+                total = min(total, self.mass)
             return total - self.inserted_mass
-        whole = round(total)
-        if abs(total - whole) <= 1e-9 * max(1.0, total):
-            total = float(whole)
+        if self.count is not None:
+            total = min(total, float(self.count))
+        if math.isfinite(total):
+            whole = round(total)
+            if abs(total - whole) <= 1e-9 * max(1.0, total):
+                total = float(whole)
         return total - self.inserted
 
     def draw(self) -> tuple[str, dict[str, float]]:
@@ -345,7 +415,9 @@ class Inlet:
         for key, v in spec.items():
             if key in ("shape", "fraction"):
                 continue
-            if is_range(v, cls, key):
+            if isinstance(v, SizeDistribution):
+                params[key] = v.sample(self.rng)
+            elif is_range(v, cls, key):
                 lo, hi = float(v[0]), float(v[1])
                 params[key] = lo + (hi - lo) * float(self.rng.random())
             else:
@@ -362,6 +434,55 @@ def is_range(v: Any, cls: type | None = None, key: str = "") -> bool:
         return False
     return (isinstance(v, tuple | list) and len(v) == 2 and not isinstance(v[0], str)
             and np.ndim(v[0]) == 0)
+
+
+def _totals(call: str, rate: float | None, mass_rate: float | None, count: int | None,
+            mass: float | None, start: float, stop: float) -> tuple[float | None, float | None]:
+    """(rate, mass_rate) of an inlet with its totals checked: ``count`` or ``mass`` alone
+    makes its rate inf (all due at start); the combinations the :class:`Inlet` docstring
+    refuses are refused here, by name."""
+    if count is not None and mass is not None:
+        raise ParameterError(f"{call}: give count (bodies) or mass (kg) in all, not both "
+                             f"(got count={count!r}, mass={mass!r})")
+    if count is None and mass is None:
+        return rate, mass_rate
+    total = f"count={count!r}" if count is not None else f"mass={mass!r}"
+    if rate is None and mass_rate is None:  # (a total alone: all due at start)
+        if math.isfinite(stop):
+            raise ParameterError(f"{call}: {total} without a rate is due all at start="
+                                 f"{start!r} s; stop={stop!r} has no meaning: leave it out "
+                                 "or give rate (1/s) or mass_rate (kg/s)")
+        return (math.inf, None) if count is not None else (None, math.inf)
+    own = rate if count is not None else mass_rate
+    if own is None:  # (a total in the other unit than the rate)
+        if math.isfinite(stop):
+            other = f"mass_rate={mass_rate!r}" if count is not None else f"rate={rate!r}"
+            raise ParameterError(
+                f"{call}: {total} with {other}: the time it takes depends on the sizes "
+                f"drawn, so stop={stop!r} cannot be checked to leave it room; leave stop "
+                f"out (the inlet stops at the total) or give "
+                f"{'rate' if count is not None else 'mass_rate'} instead")
+        return rate, mass_rate
+    goal = float(count if count is not None else mass)  # type: ignore[arg-type]
+    need = goal / own
+    if own * (stop - start) < goal * (1 - 1e-9):  # (a count within 1e-9 is whole: owed)
+        unit = ("bodies", "/s", "s") if count is not None else ("kg", " kg/s", "s")
+        raise ParameterError(
+            f"{call}: {total} at {'rate' if count is not None else 'mass_rate'}={own!r}"
+            f"{unit[1]} takes {need:g} s from start={start!r} s, past stop={stop!r} s (it "
+            f"would insert only {own * (stop - start):g} {unit[0]}); leave stop out or set it "
+            f"to at least {start + need:g} s")
+    return rate, mass_rate
+
+
+def _with_distributions(call: str, k: int, spec: Mapping) -> dict:
+    """Shape ``k`` of a mix with its distribution tables (``{"normal": {...}}``, as a
+    scene file writes them) made distribution objects."""
+    out = dict(spec)
+    for key, v in spec.items():
+        if key not in ("shape", "fraction") and is_distribution_table(v):
+            out[key] = from_table(f"{call}: shapes[{k}] {key}", v)
+    return out
 
 
 def _rows(ids: np.ndarray, wanted: np.ndarray) -> np.ndarray:
@@ -387,7 +508,10 @@ def resolve_shape(call: str, k: int, spec: Mapping) -> tuple[type, dict, dict]:
     for key, v in spec.items():
         if key in ("shape", "fraction"):
             continue
-        if is_range(v, cls, key):
+        if isinstance(v, SizeDistribution):
+            ranges.append(f"{key}={v!r}")
+            low[key], high[key] = v.low, v.high
+        elif is_range(v, cls, key):
             shown = f"{key}={tuple(v)!r}"
             ranges.append(shown)
             pair = numeric_array(v)

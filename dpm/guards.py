@@ -103,8 +103,7 @@ class EnergyBook:
         """initial, work, inserted, removed, current (E), kinetic and dissipated (D above)
         [J] (the bodies' energies from the backend: :meth:`CpuBackend.energies`, summed
         over the ranks' owned rows by an MPI backend between a run's calls)."""
-        ask = getattr(sim.backend, "energies", None)
-        kin, now = ask(sim.gravity) if ask is not None else energies(sim.bodies, sim.gravity)
+        kin, now = sim.backend.energies(sim.gravity)
         w = self.work(sim)
         return {"initial": self.initial, "work": w, "inserted": self.inserted,
                 "removed": self.removed, "current": now, "kinetic": kin,

@@ -193,14 +193,15 @@ def wait_for_inlets(sim: Any, nsteps: int) -> int:
     problems = inlet_problems(sim)
     if problems:
         raise SceneError("scene check before the first step:\n  " + "\n  ".join(problems))
-    sim._schedule_flows()
+    flow = sim.operations.flow
+    flow.schedule(sim)
     skipped = 0
     while len(sim.bodies) == 0 and skipped < nsteps:
-        n = min(nsteps - skipped, max(1, sim._next_flow - sim.step_count))
+        n = min(nsteps - skipped, max(1, flow.next - sim.step_count))
         sim.step_count += n
         skipped += n
-        if sim.step_count >= sim._next_flow:
-            sim._next_flow += sim._flow_every
+        if sim.step_count >= flow.next:
+            flow.next += flow.every
             flow_event(sim)
     return skipped
 

@@ -232,6 +232,18 @@ def _motion(where: str, spec: Any) -> list[str]:
     return _unknown(f"{where}: motion", spec, ["type", *getattr(cls, "parameters", {})])
 
 
+def _distributions(where: str, table: dict, own: Iterable[str]) -> list[str]:
+    """The problems of the size distributions among a shape's parameters (tables such as
+    ``radius = { normal = { mean = ..., std = ..., low = ..., high = ... } }``: a known
+    distribution, its keys known and the required ones present; :mod:`dpm.distributions`);
+    the values are checked when the inlet is built."""
+    from .distributions import table_problems
+
+    own = set(own)
+    return [m for k, v in table.items() if k not in own and isinstance(v, dict)
+            for m in table_problems(f"{where}: {k}", v)]
+
+
 def _csv_file(lead: str, file: Path) -> list[str]:
     """The problem of a [[particles]] table's csv ``file`` (none for a regular file)."""
     try:
@@ -304,9 +316,11 @@ def scene_problems(doc: dict[str, Any], base: Path | None = None) -> list[str]:
                                      f"{where}: shapes[{j}]: shape")
                 problems += bad or _unknown(f"{where}: shapes[{j}]", s,
                                             ["shape", "fraction", *names])
+                problems += _distributions(f"{where}: shapes[{j}]", s, ["shape", "fraction"])
         else:
             names, bad = _params("shape", spec.get("shape", "sphere"), f"{where}: shape")
             problems += bad or _unknown(where, spec, [*own, *names])
+            problems += _distributions(where, spec, own)
     for k, spec in enumerate(doc.get("outlets", [])):
         problems += _region(f"outlets[{k}]", spec.get("region"))
         problems += _unknown(f"outlets[{k}]", spec, ["region", "remove", "every", "name"])

@@ -38,6 +38,7 @@ from .impact.design_speed import design_speed_warnings, overlap_hint
 from .impact.parts import contact_reach, pack_tables
 from .material import Material
 from .motion import frames
+from .operations import Operations
 from .parameters import Parameter, validate
 from .plugins import call_hook, registry
 from .regions import Region
@@ -190,15 +191,10 @@ class Simulation:
         #: elements checked for initial overlaps (those added later are checked against
         #: their neighbours only)
         self._checked_elements = 0
-        self._next_output = 0
-        self._flow_every = 0
-        self._next_flow = 0
-        #: the step of the next renumbering check, None while the backend renumbers not
-        self._next_sort: int | None = None
-        #: periodic checkpoints (:meth:`checkpoint_every`), None when off
-        self._checkpoints = None
-        #: scheduled boundary switches (:mod:`dpm.switches`), by time
-        self._switches: list = []
+        #: what the run loop does between kernel calls, each with its trigger (output
+        #: frames, flow events, boundary switches, checkpoints, the cell-order sort, the
+        #: script's own callbacks): :mod:`dpm.operations`
+        self.operations = Operations()
         #: forces by id of the bodies before the population changed (population.py)
         self._force_snapshot: dict | None = None
         #: bodies with ids below this have integrator state (started)
@@ -226,8 +222,6 @@ class Simulation:
         #: the Writer of the latest output file (open or closed): .path, .frames
         self.last_output = None
         self._output_path: str | None = None
-        self._output_every: int | None = None
-        self._output_every_s: float | None = None
 
     # ----------------------------------------------------------------- settable state
     @property
@@ -272,9 +266,7 @@ class Simulation:
         self._dt = value
         self._auto_dt = False
         self._dt_checked = False
-        if self._output_every_s is not None and self._writer is not None:
-            self._output_every = max(1, round(self._output_every_s / value))
-            self._next_output = self.step_count + self._output_every
+        self.operations.dt_changed(self)  # (intervals in seconds stay in seconds)
         if self._forces_valid and math.isfinite(old):
             self.integrator.dt_changed(self, old)
 
@@ -340,17 +332,17 @@ class Simulation:
     def rank(self) -> int:
         """This process's MPI rank (0 on one process): a script or hook that runs on
         every rank tells them apart by it."""
-        return int(getattr(self.backend, "rank", 0))
+        return int(self.backend.rank)
 
     @property
     def ranks(self) -> int:
         """The number of MPI ranks running this scene (1 on one process)."""
-        return int(getattr(self.backend, "ranks", 1))
+        return int(self.backend.ranks)
 
     @property
     def threads(self) -> int | None:
         """Threads of the step kernels (None: the backend's default)."""
-        return getattr(self.backend, "threads", None)
+        return self.backend.threads
 
     @threads.setter
     def threads(self, value: int | None) -> None:
@@ -499,6 +491,7 @@ class Simulation:
                   shape: str = "sphere", velocity: Sequence[float] = (0.0, 0.0, 0.0),
                   start: float = 0.0, stop: float = math.inf, every: float = 1e-3,
                   seed: int = 0, random_orientation: bool = True, max_attempts: int = 30,
+                  count: int | None = None, mass: float | None = None,
                   **shape_params: Any) -> Inlet:
         """Insert particles during the run; return the inlet (:class:`dpm.flow.Inlet`,
         whose docstring gives the insertion rules).
@@ -531,6 +524,11 @@ class Simulation:
             uniform random orientations (default True).
         max_attempts : int
             places tried per body at each event (default 30).
+        count : int, optional
+            bodies in all; then the inlet stops (with ``rate`` or ``mass_rate`` setting
+            how fast; alone: all due at ``start``).
+        mass : float, optional
+            mass in all [kg]: bodies until their mass reaches it (as ``count``).
         **shape_params
             the shape's parameters when ``shapes`` is not given; a misspelt inlet or
             shape parameter raises :class:`~dpm.errors.ParameterError` naming it.
@@ -539,7 +537,7 @@ class Simulation:
         inlet = Inlet(region, material, rate=rate, mass_rate=mass_rate, shapes=shapes,
                       shape=shape, velocity=velocity, start=start, stop=stop, every=every,
                       seed=seed, random_orientation=random_orientation,
-                      max_attempts=max_attempts, **shape_params)
+                      max_attempts=max_attempts, count=count, mass=mass, **shape_params)
         self.inlets.append(inlet)
         self._scene_box = None
         return inlet
@@ -673,8 +671,7 @@ class Simulation:
                                  f"first or choose another path")
         if not appending:
             # (MPI: rank 0 creates the file, maybe before another rank gets here)
-            check_output_path(name, bool(overwrite) or not getattr(self.backend, "root",
-                                                                   True))
+            check_output_path(name, bool(overwrite) or not self.backend.root)
             self.close()
             self._output_path = name
             self._output_overwrite = bool(overwrite)
@@ -682,12 +679,9 @@ class Simulation:
         self._output_fields = chosen
         self._output_contacts = bool(contacts)
         self._output_solids = bool(solids)
-        self._output_every_s = every
-        self._output_every = None if every is not None else int(every_steps)
+        self.operations.frames.set(every, every_steps)
         if appending:
-            if every is not None:
-                self._output_every = max(1, round(every / self.dt))
-            self._next_output = self.step_count + self._output_every
+            self.operations.frames.restart_from_here(self)
 
     def close(self) -> None:
         """Close the output file (and cancel an :meth:`output` whose file a run has not
@@ -814,10 +808,13 @@ class Simulation:
         Between kernel calls, in this order: ``dpm_after_step`` hooks (when any hook runs
         per step, every call is one step, with ``dpm_before_step`` before it); boundary
         loads, the instability checks (NaN, overlap beyond
-        ``max_overlap``, tunnelling speed); the flow event (outlets remove, then inlets
-        insert) when its interval is due; an output frame (then ``dpm_on_output``) when
-        due; the boundary switches (:meth:`switch_off`) when due; a periodic checkpoint
-        when due. Calls are as long as these events allow, aiming at ~0.1 s each.
+        ``max_overlap``, tunnelling speed); then the operations due at this step
+        (``sim.operations``, :mod:`dpm.operations`), in order: the cell-order sort, the
+        flow event (outlets remove, then inlets insert), an output frame (then
+        ``dpm_on_output``), the boundary switches (:meth:`switch_off`), a periodic
+        checkpoint, the script's own callbacks (``sim.operations.add(dpm.Callback(f,
+        every_steps=N))``). Calls end where an operation is due and are otherwise as long
+        as ~0.1 s of work.
         """
         if unknown:
             raise ParameterError(f"sim.run(): unknown parameter(s) {', '.join(unknown)}; "
@@ -889,15 +886,13 @@ class Simulation:
         hooks = self._registry.manager.hook
         per_step_hooks = bool(hooks.dpm_before_step.get_hookimpls()
                               or hooks.dpm_after_step.get_hookimpls())
-        if hasattr(self.backend, "agree_any"):  # (MPI: a hook on any rank, steps on all)
-            per_step_hooks = self.backend.agree_any(per_step_hooks)
-        root = getattr(self.backend, "root", True)  # (MPI: rank 0 writes and reports)
+        # (MPI: a hook on any rank, steps on all; rank 0 writes and reports)
+        per_step_hooks = self.backend.agree_any(per_step_hooks)
+        root = self.backend.root
         bar = Progress(nsteps, self.dt, self.time, enabled=progress if root else False)
         if self._output_path is not None and self._writer is None:
             from .io.hdf5 import Writer
 
-            if self._output_every_s is not None:
-                self._output_every = max(1, round(self._output_every_s / self.dt))
             if root:
                 self._writer = Writer(self._output_path, self,
                                       overwrite=self._output_overwrite)
@@ -906,25 +901,21 @@ class Simulation:
 
                 self._writer = NullWriter(self._output_path, self)
             self.last_output = self._writer
-            self._next_output = (self.step_count // self._output_every + 1) * self._output_every
+            self.operations.frames.first(self)
             self._write_frame()
-        self._schedule_flows()
-        if self._switches:
-            switches.apply_due(self)  # (dt may have changed since they were scheduled)
-        self._schedule_sort()
+        self.operations.start(self)  # (each schedules itself from here and dt)
         done = 0
         chunk = self._first_chunk()
-        if hasattr(self.backend, "agree_chunk"):
-            chunk = self.backend.agree_chunk(chunk)
+        chunk = self.backend.agree_chunk(chunk)
         # (the host state is brought up to the backend's before anything between calls
         # reads or changes it, and at the run's end: an MPI backend gathers then only)
-        sync = getattr(self.backend, "sync_host", lambda: None)
+        sync = self.backend.sync_host
         try:
             while done < nsteps:
                 n = min(nsteps - done, chunk)
                 if per_step_hooks:
                     n = 1
-                for due in self._due_steps():
+                for due in self.operations.due_steps(self):
                     n = min(n, due - self.step_count)
                 if per_step_hooks:
                     sync()
@@ -936,25 +927,8 @@ class Simulation:
                 if per_step_hooks:
                     sync()
                     call_hook(self._registry, "dpm_after_step", sim=self)
-                if self._next_sort is not None and self.step_count >= self._next_sort:
-                    sync()
-                    self.backend.sort_due()
-                    self._schedule_sort()
-                if self._flow_every and self.step_count >= self._next_flow:
-                    self._next_flow += self._flow_every
-                    sync()
-                    population.flow_event(self)
-                    self._schedule_sort()  # (an inlet may grow the scene past SORT_FROM)
-                if self._writer is not None and self.step_count >= self._next_output:
-                    self._next_output += self._output_every
-                    self._write_frame()
-                if self._switches and switches.next_step(self) <= self.step_count:
-                    sync()
-                    switches.apply_due(self)
-                if self._checkpoints is not None and \
-                        self.step_count >= self._checkpoints.next_step:
-                    sync()
-                    self._checkpoints.write(self)
+                # what is due here, in the operations' order (dpm/operations.py)
+                self.operations.run_due(self, sync)
                 bar.update(ran, self.time)
                 # aim at ~0.1 s of work per call (Python runs only at these events), and
                 # at least 100x the checks after each call: at 1e6 spheres a step takes
@@ -965,8 +939,7 @@ class Simulation:
                     if ran == n:
                         self._call_rate = (elapsed / ran / max(len(self.bodies), 1), ran)
                     chunk = int(min(max(chunk * min(aim / elapsed, 4.0), 1), 100000))
-                if hasattr(self.backend, "agree_chunk"):  # (MPI: the same on every rank)
-                    chunk = self.backend.agree_chunk(chunk)
+                chunk = self.backend.agree_chunk(chunk)  # (MPI: the same on every rank)
             sync()
         finally:
             bar.close()
@@ -974,19 +947,8 @@ class Simulation:
                 self._writer.flush()
 
 
-    def _schedule_sort(self) -> None:
-        """If the backend renumbers this scene in cell order (``backend.sorts()``), the
-        next multiple of ``SORT_CHECK_STEPS`` steps (counted from step 0: the same steps
-        however the run is split) becomes an event (:meth:`_due_steps`) at which a kernel
-        call ends and ``backend.sort_due()`` decides; else none."""
-        self._next_sort = None
-        if getattr(self.backend, "sorts", lambda: False)():
-            from .backends.cpu import SORT_CHECK_STEPS
-
-            self._next_sort = (self.step_count // SORT_CHECK_STEPS + 1) * SORT_CHECK_STEPS
-
     def _call_aim(self) -> float:
-        return max(getattr(self.backend, "call_aim", 0.1), 100.0 * self._check_cost)
+        return max(self.backend.call_aim, 100.0 * self._check_cost)
 
     def _first_chunk(self) -> int:
         """Steps of a run's first kernel call: 10, or, after an earlier run, what its last
@@ -998,32 +960,6 @@ class Simulation:
         rate, last = self._call_rate
         predicted = self._call_aim() / max(rate * max(len(self.bodies), 1), 1e-300)
         return int(min(max(predicted, 10), 4 * last, 100000))
-
-    def _schedule_flows(self) -> None:
-        """The step of the next flow event (outlets, inlets): every ``min(every)`` of
-        them, counted from the last change of dt."""
-        flows = self.inlets + self.outlets
-        fe = max(1, round(min(f.every for f in flows) / self.dt)) if flows else 0
-        if fe != self._flow_every:
-            self._flow_every = fe
-            if fe:
-                s0 = self._step0
-                self._next_flow = s0 + ((self.step_count - s0) // fe + 1) * fe
-
-    def _due_steps(self) -> list[int]:
-        """Steps at which an event is due: a kernel call ends there."""
-        due = []
-        if self._writer is not None:
-            due.append(self._next_output)
-        if self._flow_every:
-            due.append(self._next_flow)
-        if self._checkpoints is not None:
-            due.append(self._checkpoints.next_step)
-        if self._switches:
-            due.append(switches.next_step(self))
-        if self._next_sort is not None:
-            due.append(self._next_sort)
-        return due
 
     def _advance(self, n: int) -> int:
         """Run ``n`` steps in as few backend calls as possible; diagnose a failure."""
@@ -1049,7 +985,7 @@ class Simulation:
         self.step_count += total
         self._update_boundary_loads()
         if res.status != STATUS_OK:  # (the diagnosis reads the host state)
-            getattr(self.backend, "sync_host", lambda: None)()
+            self.backend.sync_host()
         if res.status == STATUS_NAN:
             self._fail("a position became NaN")
         if res.status == STATUS_INTEGRATOR:
@@ -1090,7 +1026,7 @@ class Simulation:
                            w.frame[k, 12:15].copy(), w.frame[k, 15:18].copy())
 
     def _write_frame(self) -> None:
-        getattr(self.backend, "sync_host", lambda: None)()
+        self.backend.sync_host()
         self._writer.write(self)
         self._last_frame_step = self.step_count
         call_hook(self._registry, "dpm_on_output", sim=self, frame=self._writer.frames - 1,
@@ -1120,7 +1056,7 @@ class Simulation:
         from . import checkpoint as _ckpt
 
         if path is None:
-            self._checkpoints = None
+            self.operations.checkpoints = None
             return
         if isinstance(path, bool) or not isinstance(path, str | os.PathLike) or not str(path):
             raise ParameterError(f"sim.checkpoint_every(): path={path!r} must be a file name")
@@ -1142,7 +1078,7 @@ class Simulation:
         from .io.state_tree import encode
 
         encode(self, "sim.checkpoint_every()")  # (what a checkpoint cannot store: refused now)
-        self._checkpoints = _ckpt.Schedule(base, None if every is None else float(every),
+        self.operations.checkpoints = _ckpt.Schedule(base, None if every is None else float(every),
                                            None if every_steps is None else int(every_steps),
                                            int(keep), self.step_count,
                                            self.dt if self.dt > 0 else 1.0)
@@ -1170,8 +1106,9 @@ class Simulation:
 
         ws = self.__dict__.pop("_writer_state", None)
         resume_output(self, ws)
-        if self._checkpoints is not None and self._checkpoints.next_step <= self.step_count:
-            self._checkpoints.next_step = self.step_count + self._checkpoints.interval(self.dt)
+        ck = self.operations.checkpoints
+        if ck is not None and ck.next <= self.step_count:
+            ck.next = self.step_count + ck.interval(self.dt)
         call_hook(self._registry, "dpm_on_restart", sim=self,
                   state=self.__dict__.pop("_plugin_state", {}) or {})
 

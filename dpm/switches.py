@@ -74,8 +74,8 @@ def schedule(sim: Any, boundary: Any, on: bool, at: Any) -> None:
         if t < sim.time:
             raise ParameterError(f"{call}: at={t!r} s lies before the simulation's time "
                                  f"{sim.time!r} s; allowed: at >= sim.time, or None (now)")
-    sim._switches.append(Switch(k, bool(on), t))
-    sim._switches.sort(key=lambda s: s.time)
+    sim.operations.switches.pending.append(Switch(k, bool(on), t))
+    sim.operations.switches.pending.sort(key=lambda s: s.time)
     apply_due(sim)
 
 
@@ -86,14 +86,16 @@ def step_of(sim: Any, t: float) -> int:
 
 def next_step(sim: Any) -> int | None:
     """The step of the next pending switch, None if there is none."""
-    return step_of(sim, sim._switches[0].time) if sim._switches else None
+    pending = sim.operations.switches.pending
+    return step_of(sim, pending[0].time) if pending else None
 
 
 def apply_due(sim: Any) -> bool:
     """Apply the switches due by now; True if a boundary changed state."""
     changed = False
-    while sim._switches and step_of(sim, sim._switches[0].time) <= sim.step_count:
-        s = sim._switches.pop(0)
+    pending = sim.operations.switches.pending
+    while pending and step_of(sim, pending[0].time) <= sim.step_count:
+        s = pending.pop(0)
         bd = sim.boundaries[s.index]
         if bd.enabled != s.on:
             bd.enabled = s.on

@@ -126,7 +126,7 @@ class DischargeRate(Quantity):
     def window(self, sim, until, window):
         if window is not None:
             return window
-        offs = [s.time for s in getattr(sim, "_switches", []) if not s.on]
+        offs = [s.time for s in sim.operations.switches.pending if not s.on]
         t_open = min(offs) if offs else sim.time
         return (t_open + 0.25 * (until - t_open), until)
 

@@ -20,8 +20,7 @@ is the same bit for bit as ``n`` calls of :meth:`step`.
 
 Reductions (:meth:`max_speed`, :meth:`max_overlap`, :meth:`nan_count`,
 :meth:`boundary_loads`, :meth:`contact_count`) are what the run loop asks between calls;
-an MPI backend reduces them over ranks, a GPU backend on the device. Optional (the run
-loop asks with ``getattr``, so a backend without them keeps working): ``sync_host()``
+an MPI backend reduces them over ranks, a GPU backend on the device. ``sync_host()``
 brings ``sim.bodies`` up to date where calls leave the host behind (an MPI backend
 gathers the ranks' rows only when the run loop needs them: output, flow events, hooks, a
 run's end), with ``host_stale`` saying whether they did; ``guard_hits(nonfinite,
@@ -30,6 +29,12 @@ backend's own state. :meth:`to_host` and
 :meth:`from_host` move the state to and from ``sim.bodies`` (and the other containers) for
 output, hooks, flow events and checkpoints; for the CPU backend they are no-ops (the host
 arrays are the state).
+
+Every member the run loop and the rest of dpm call is declared here; nothing asks a
+backend with ``getattr`` whether it has one. :class:`BackendBase` gives the defaults of a
+backend on one process whose host arrays are its state (the communicator's members:
+``rank``, ``ranks``, ``root``, ``agree_chunk``, ``agree_any``; no renumbering; no sync):
+the CPU backend derives from it, and the MPI and CUDA backends from the CPU backend.
 """
 
 from __future__ import annotations
@@ -100,6 +105,84 @@ class Backend(Protocol):
     # state transfer
     def to_host(self) -> None: ...
     def from_host(self) -> None: ...
+    def sync_host(self) -> None: ...
+
+    # what else the run loop and dpm ask (defaults: :class:`BackendBase`)
+    threads: int | None
+    rank: int
+    ranks: int
+    root: bool
+    call_aim: float
+    host_stale: bool
+
+    def thread_count(self, n_elements: int) -> int: ...
+    def sync_form(self) -> None: ...
+    def agree_chunk(self, n: int) -> int: ...
+    def agree_any(self, flag: bool) -> bool: ...
+    def sorts(self) -> bool: ...
+    def sort_due(self) -> None: ...
+    def energies(self, gravity: np.ndarray) -> tuple[float, float]: ...
+    def guard_hits(self, nonfinite: bool, box: np.ndarray | None) -> bool: ...
+    def force_rows_current(self) -> bool: ...
+    def force_velocities(self) -> tuple[np.ndarray, np.ndarray] | None: ...
+
+
+class BackendBase:
+    """The defaults of :class:`Backend`'s members for a backend on one process whose host
+    arrays are its state (see the module docstring); a backend overrides what differs."""
+
+    name = ""
+    #: threads of the step kernels (None: the backend's default)
+    threads: int | None = None
+    #: this process's rank, the number of ranks, and whether this rank writes the files
+    rank = 0
+    ranks = 1
+    root = True
+    #: seconds of work the run loop aims each kernel call at
+    call_aim = 0.1
+    #: whether ``sim.bodies`` lags the backend's state (see :meth:`sync_host`)
+    host_stale = False
+
+    def thread_count(self, n_elements: int) -> int:
+        """Threads for a run of a scene of ``n_elements`` elements."""
+        return 1
+
+    def sync_form(self) -> None:
+        """Follow a changed thread count (a step module with another form)."""
+
+    def agree_chunk(self, n: int) -> int:
+        """The steps of the next call, the same on every rank."""
+        return n
+
+    def agree_any(self, flag: bool) -> bool:
+        """Whether ``flag`` holds on any rank."""
+        return flag
+
+    def sync_host(self) -> None:
+        """Bring the host state up to the backend's (nothing: the host is the state)."""
+
+    def sorts(self) -> bool:
+        """Whether the run renumbers its bodies in cell order (:meth:`sort_due`)."""
+        return False
+
+    def sort_due(self) -> None:
+        """At a renumbering check (when :meth:`sorts`): renumber if it is time."""
+
+    def force_rows_current(self) -> bool:
+        """Whether the pairs' force rows hold the forces of the last evaluation (the
+        contact output reads them instead of evaluating the pairs again)."""
+        return False
+
+    def force_velocities(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The (linear, angular) velocities the last force evaluation saw (an
+        integrator's prediction), None where they are the state's."""
+        return None
+
+    def to_host(self) -> None:
+        """The host arrays are the state: nothing to copy."""
+
+    def from_host(self) -> None:
+        """The host arrays are the state: nothing to copy."""
 
 
 def step_by_parts(backend: Backend, dt: float) -> int:

@@ -21,6 +21,7 @@ from .base import (
     STATUS_OVERFLOW,
     STATUS_OVERLAP,
     STATUS_WALL_OVERFLOW,
+    BackendBase,
     StepResult,
 )
 from .records import (
@@ -97,7 +98,7 @@ def threading_layer_advice(threads: int) -> str | None:
             "also silences this).")
 
 
-class CpuBackend:
+class CpuBackend(BackendBase):
     """numba kernels on the host.
 
     Parameters
@@ -515,8 +516,12 @@ class CpuBackend:
         answers from its own state; here the host is the state, so look there (True)."""
         return True
 
-    def to_host(self) -> None:
-        """The host arrays are the state: nothing to copy."""
+    def force_rows_current(self) -> bool:
+        """The two-pass form keeps every pair's force row of the last evaluation (the
+        fused pass only those of pairs across chunks)."""
+        module = self.module
+        return module is not None and not getattr(module, "FUSED", True)
 
-    def from_host(self) -> None:
-        """The host arrays are the state: nothing to copy."""
+    def force_velocities(self) -> tuple[np.ndarray, np.ndarray] | None:
+        vf, wf = self.__dict__.get("vf"), self.__dict__.get("wf")
+        return None if vf is None or wf is None else (vf, wf)

@@ -527,6 +527,11 @@ class CudaBackend(CpuBackend):
     def _write_state(self, st: np.ndarray) -> None:
         self._dev["state"].copy_to_device(st)
 
+    def force_rows_current(self) -> bool:
+        """The contact output evaluates the pairs again (the force rows of the last
+        evaluation are the CPU backend's own, one process)."""
+        return False
+
     def sorts(self) -> bool:
         """No renumbering on the device (its lists sort their own rows)."""
         return False

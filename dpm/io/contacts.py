@@ -65,10 +65,8 @@ def rotation_columns(q: np.ndarray) -> np.ndarray:
 def _rows_hold_forces(sim: Any) -> bool:
     """Whether the pairs' force rows hold the forces of the last evaluation: the CPU
     backend's two-pass form (the fused pass stores rows only for pairs across chunks)."""
-    backend, c = sim.backend, sim.contacts
-    module = getattr(backend, "module", None)
-    return (getattr(backend, "name", "") == "cpu" and module is not None
-            and not getattr(module, "FUSED", True) and not sim.integrator.implicit and c.rows
+    c = sim.contacts
+    return (sim.backend.force_rows_current() and not sim.integrator.implicit and c.rows
             and len(c.force) >= c.count)
 
 
@@ -81,7 +79,8 @@ def _evaluated_rows(sim: Any) -> np.ndarray:
                             sim.walls, sim.plan)
     n, m = c.count, wc.count
     # the velocities the forces saw (the integrator's prediction), else the state's
-    vf, wf = (getattr(sim.backend, name, None) for name in ("vf", "wf"))
+    seen = sim.backend.force_velocities()
+    vf, wf = seen if seen is not None else (None, None)
     if vf is None or wf is None or vf.shape != b.velocity.shape or wf.shape != vf.shape:
         vf, wf = b.velocity, b.angular_velocity
     ctl = rec.SceneConstants(np.asarray(sim.gravity, float), float(sim.skin or 0.0),

@@ -39,6 +39,13 @@ Layout (every table mirrors a call; keys are the call's keyword arguments)::
     region = { box = { lower = [0, 0, 0.1], upper = [0.04, 0.04, 0.12] } }
     rate = 1000                  # or mass_rate (kg/s)
     radius = [1e-3, 1.2e-3]      # a pair: uniform between
+    # count = 5000 or mass = 2.0 (kg): the total, then the inlet stops (alone: all at
+    # start); a size distribution (dpm.distributions) instead of the pair:
+    # radius = { normal = { mean = 1.1e-3, std = 1e-4, low = 9e-4, high = 1.3e-3 } }
+    # radius = { lognormal = { median = 1e-3, gsd = 1.2, low = 6e-4, high = 2e-3 } }
+    #          (or mu, sigma of ln(radius); basis = "mass" for a mass distribution's x50)
+    # radius = { sieve = { edges = [5e-4, 1e-3, 2e-3], fractions = [0.3, 0.7] } }
+    #          (mass fractions retained between consecutive edges: radii, half apertures)
 
     [[outlets]]                  # sim.add_outlet(dpm.BoxRegion(...), remove="inside")
     region = { cylinder = { start = [0, 0, -1], axis = [0, 0, 1], length = 0.9, radius = 1 } }

@@ -9,10 +9,12 @@ again: containers and numbers directly, numpy arrays from datasets, objects by
 the file is ever called: the file names classes, and only classes that this process
 already trusts are built:
 
-- classes of dpm itself, of a registered plugin's module, or of the running script
-  (``__main__``), and subclasses of a dpm class defined anywhere already imported;
-- functions and classes referred to (a motion's profile, an integrator's kernel maker)
-  only from dpm, a plugin's module or ``__main__``;
+- classes of dpm itself, of a registered plugin's module, of the running script
+  (``__main__``) or of a module of the user's own code it imported (a module already
+  imported whose file is outside the standard library and the installed packages), and
+  subclasses of a dpm class defined anywhere already imported;
+- functions and classes referred to (a callback, a motion's profile) only from those
+  same modules;
 - numpy arrays of numbers, booleans or text; numpy scalars and dtypes; numpy random
   generators (their bit generator's name and state); paths, enums, slices, ranges.
 
@@ -40,6 +42,7 @@ import copyreg
 import enum
 import importlib
 import math
+import os
 import pathlib
 import sys
 from collections import OrderedDict, defaultdict, deque
@@ -71,9 +74,35 @@ def _name(obj: Any) -> str:
     return f"{obj.__module__}:{obj.__qualname__}"
 
 
+def _library_dirs() -> tuple[str, ...]:
+    """Where the standard library and installed packages live (their code is never named
+    by a checkpoint)."""
+    import site
+    import sysconfig
+
+    dirs = {sysconfig.get_paths().get(k) for k in ("stdlib", "platstdlib", "purelib",
+                                                    "platlib")}
+    try:
+        dirs.update(site.getsitepackages())
+        dirs.add(site.getusersitepackages())
+    except AttributeError:  # (a virtualenv's old site module)
+        pass
+    return tuple(os.path.realpath(d) + os.sep for d in dirs if d)
+
+
+def _script_module(module: str) -> bool:
+    """A module of the user's own code already imported (its file outside the standard
+    library and the installed packages): a script's helper module."""
+    mod = sys.modules.get(module)
+    path = getattr(mod, "__file__", None)
+    if not path:
+        return False
+    return not os.path.realpath(path).startswith(_library_dirs())
+
+
 def _trusted_module(module: str, plugins: frozenset[str]) -> bool:
     return (module == "dpm" or module.startswith("dpm.") or module == "__main__"
-            or module in plugins)
+            or module in plugins or _script_module(module))
 
 
 def plugin_modules() -> frozenset[str]:

@@ -311,6 +311,11 @@ class MpiBackend(CpuBackend):
             self._host_copy, strict=True))
 
     # ------------------------------------------------------------------ the steps
+    def force_rows_current(self) -> bool:
+        """The contact output evaluates the pairs again (the force rows of the last
+        evaluation are the CPU backend's own, one process)."""
+        return False
+
     def sorts(self) -> bool:
         """Across ranks no renumbering in cell order (each migration lays a rank's rows
         out anew); on one rank as :class:`CpuBackend`."""

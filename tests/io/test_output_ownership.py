@@ -21,23 +21,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from small_scene import small_scene
 
 import dpm
 from dpm import checkpoint as ckpt
 
 HERE = Path(__file__).resolve().parent
-
-
-def small_scene(friction: float = 0.5, shift: float = 0.0) -> dpm.Simulation:
-    sim = dpm.Simulation(dt=2e-5, gravity=(0, 0, -9.81))
-    glass = dpm.Material("glass", density=2500, young=5e6, poisson=0.45)
-    sim.contact(glass, glass, model="hertz_mindlin", restitution=0.3, friction=friction)
-    sim.add_boundary("box", material=glass, lower=(0, 0, 0), upper=(0.01, 0.01, 0.02),
-                     open=("+z",))
-    xyz = dpm.lattice((0, 0, 0), (0.01, 0.01, 0.004), spacing=2.1e-3, jitter=4e-5)
-    xyz[:, 2] += shift
-    sim.add_particles("sphere", material=glass, radius=1e-3, positions=xyz)
-    return sim
 
 
 def snapshot(d: Path) -> dict[str, bytes]:
@@ -171,7 +160,7 @@ def test_checkpoint_every_checks_its_directory_at_the_call(tmp_path):
         msg = str(err.value)
         assert msg.startswith("sim.checkpoint_every(): path=") and str(bad) in msg
         assert "is a file, not a directory" in msg and "allowed:" in msg
-    assert sim._checkpoints is None
+    assert sim.operations.checkpoints is None
     if os.path.isdir("/proc/self"):  # /proc takes no file, not even from root
         with pytest.raises(dpm.ParameterError, match="no file can be created in '/proc'"):
             sim.checkpoint_every("/proc/run.ckpt.h5", every_steps=10)

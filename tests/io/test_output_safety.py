@@ -183,7 +183,7 @@ def test_output_checks_the_interval(tmp_path, kw, why):
 def test_output_accepts_integral_float_steps(tmp_path):
     sim = dpm.Simulation(dt=1e-5)
     sim.output(tmp_path / "run.h5", every_steps=1e3)
-    assert sim._output_every == 1000
+    assert sim.operations.frames.every == 1000
 
 
 def test_output_checks_the_path_before_the_run(tmp_path):

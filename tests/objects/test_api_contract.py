@@ -9,7 +9,8 @@ import dpm
 
 def test_contract_names_and_signatures():
     for name in ("Simulation", "Material", "Shape", "Boundary", "ImpactModel", "Integrator",
-                 "load", "ParameterError"):
+                 "load", "ParameterError", "UnknownNameError", "SceneError",
+                 "UnstableRunError", "OutputError", "restart"):
         assert hasattr(dpm, name), name
     sig = inspect.signature(dpm.Simulation)
     for p in ("dt", "gravity", "integrator"):

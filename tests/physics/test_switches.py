@@ -130,7 +130,7 @@ def test_checkpoint_carries_a_pending_switch(tmp_path):
     path = a.checkpoint(tmp_path / "c.h5")
     a.run(steps=1000, progress=False)
     b = dpm.restart(path)
-    assert b.boundaries[1].enabled and len(b._switches) == 1
+    assert b.boundaries[1].enabled and len(b.operations.switches.pending) == 1
     b.run(steps=1000, progress=False)
     assert not b.boundaries[1].enabled
     assert np.array_equal(state(a), state(b))
@@ -197,7 +197,8 @@ positions = [[0.0, 0.0, 0.011]]
     f = tmp_path / "s.toml"
     f.write_text(text)
     sim, _ = load_scene(f, output=False)
-    assert [(s.on, s.time) for s in sim._switches] == [(False, 0.001), (True, 0.002)]
+    pending = sim.operations.switches.pending
+    assert [(s.on, s.time) for s in pending] == [(False, 0.001), (True, 0.002)]
     sim.run(until=0.0015, progress=False)
     assert not sim.boundaries[1].enabled
     f.write_text(text.replace("switch_on", "switch_onn"))
