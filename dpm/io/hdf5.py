@@ -909,9 +909,9 @@ class Writer:
         if extra or "contacts" in self.file:
             from .contacts import particle_values
 
-            to_host = getattr(getattr(sim, "backend", None), "to_host", None)
-            if to_host is not None:  # (the contact lists of a device backend)
-                to_host()
+            backend = getattr(sim, "backend", None)  # (a stand-in state has none)
+            if backend is not None:  # (the contact lists of a device backend)
+                backend.to_host()
         for name in extra:
             ds = g[name]
             ds.resize(self.rows + n, axis=0)
@@ -1305,6 +1305,44 @@ class Run:
         out["time"] = float(self.times[k])
         out["step"] = int(self.steps[k])
         return out
+
+    def to_dataframe(self, k: int = -1) -> Any:
+        """Frame k's per-particle fields as a pandas DataFrame, one row per particle (by
+        id), every vector split into scalar columns: ``id``, ``position_x``,
+        ``position_y``, ``position_z``, ``velocity_x`` .., ``orientation_w``,
+        ``orientation_x``, ``orientation_y``, ``orientation_z``, ``angular_velocity_x``
+        .., ``radius``, ``mass``, ``material``, ``shape``, and the optional fields the
+        file has (``force_x`` .., ``torque_x`` .., ``contact_count``, ``rotation_xx``,
+        ``rotation_xy`` .. ``rotation_zz``: row, column of the rotation matrix). The
+        frame's ``time``, ``step`` and the file's ``materials`` and ``shapes`` names are
+        in ``df.attrs``. Needs pandas (the ``pandas`` extra)."""
+        try:
+            import pandas
+        except ImportError:
+            raise DpmError("Run.to_dataframe() needs pandas: pip install "
+                           "'dpm-granular[pandas]' (or pip install pandas)") from None
+        f = self.frame(k)
+        xyz = "xyz"
+        names = {3: tuple(xyz), 4: ("w", "x", "y", "z"),
+                 # (rotation: 9 components column after column, VTK's tensor order)
+                 9: tuple(xyz[i] + xyz[j] for j in range(3) for i in range(3))}
+        columns: dict[str, np.ndarray] = {}
+        for name, value in f.items():
+            if name in ("time", "step"):
+                continue
+            a = np.asarray(value)
+            if a.ndim == 1:
+                columns[name] = a
+                continue
+            a = a.reshape(len(a), -1)
+            parts = names.get(a.shape[1], tuple(str(c) for c in range(a.shape[1])))
+            for c, part in enumerate(parts):
+                columns[f"{name}_{part}"] = a[:, c]
+        df = pandas.DataFrame(columns)
+        df.attrs.update(time=f["time"], step=f["step"], path=str(self.path),
+                        materials=[_text(m) for m in self.attrs.get("materials", [])],
+                        shapes=[_text(s) for s in self.attrs.get("shapes", [])])
+        return df
 
     def elements(self, k: int) -> dict[str, np.ndarray]:
         """Sphere elements of frame k (clustered bodies): position, radius, body_id; empty

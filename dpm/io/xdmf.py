@@ -6,8 +6,19 @@ forces as cell attributes; written with ``sim.output(..., contacts=True)``) and
 ``run.solids.xdmf`` (the solid shapes of clustered bodies as triangles, with the body id
 and shape of each as cell attributes; written with ``sim.output(..., solids=True)``).
 
-Read by ParaView's Xdmf3 reader and by VTK's ``vtkXdmfReader`` (the tests read every value
-back with the latter).
+Read by VTK's ``vtkXdmfReader`` (ParaView's "XDMF Reader"; the tests read every value back
+with it and check that it prints no error). Each frame's rows of a growing dataset are a
+HyperSlab DataItem, which the Xdmf3 library behind ParaView's "Xdmf3 Reader S/T" does not
+read (it asks a HyperSlab array for its number type before reading it and gets none:
+``Skipping unrecognized array type [None]``, no points; ParaView 5.11).
+
+Two things keep ``vtkXdmfReader`` quiet: a frame with no rows is written as a grid of one
+point at the origin and no cell, without attributes (a hyperslab of count 0 makes the XDMF
+library print ``Alloc :: ...`` and fail); and no topology is a plain HDF DataItem (the boundaries'
+triangles are a hyperslab of all their rows): the reader's cache of unchanged grids keys
+on the text of the topology's and the geometry's first DataItem, and with a plain
+topology it prints ``Cannot find DataItem element in geometry xml, no caching possible``
+for every frame whose geometry is a hyperslab (its first child is an element, not text).
 """
 
 from __future__ import annotations
@@ -57,6 +68,17 @@ def _slab(h5name: str, field: str, start: int, count: int, width: int | tuple[in
             f'Format="HDF">{h5name}:/{group}/{field}</DataItem></DataItem>')
 
 
+def _empty_grid(t: float) -> str:
+    """A frame with no rows: one point at the origin, no cell (nothing is drawn), no
+    attributes. (An empty hyperslab or XML DataItem makes the XDMF library print
+    ``Alloc :: ...`` and fail; a Geometry without a DataItem reads an uninitialised point
+    count.)"""
+    return (f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
+            f'<Topology TopologyType="Polyvertex" NumberOfElements="0"/>'
+            f'<Geometry GeometryType="XYZ"><DataItem Dimensions="1 3" NumberType="Float" '
+            f'Precision="8" Format="XML">0 0 0</DataItem></Geometry></Grid>')
+
+
 def _attribute(name: str, width: int, center: str, slab: str) -> str:
     """An Attribute element: a scalar (width 0), a 3x3 tensor (9) or a vector."""
     # (a quaternion is a "Vector" of 4: "Matrix" reads as one tuple of 4 n values)
@@ -80,6 +102,9 @@ def write_xdmf_from_arrays(h5path: Path, times, starts, counts, rows: int,
            f'<Grid Name="{group}" GridType="Collection" CollectionType="Temporal">']
     for t, a, n in zip(times, starts, counts, strict=True):
         a, n = int(a), int(n)
+        if n == 0:
+            out.append(_empty_grid(t))
+            continue
         out.append(f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
                    f'<Topology TopologyType="Polyvertex" NumberOfElements="{n}"/>'
                    f'<Geometry GeometryType="XYZ">'
@@ -106,8 +131,7 @@ def write_boundaries_xdmf(h5path: Path, times, nverts: int, nfaces: int) -> Path
         out.append(
             f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
             f'<Topology TopologyType="Triangle" NumberOfElements="{nfaces}">'
-            f'<DataItem Dimensions="{nfaces} 3" NumberType="Int" Precision="8" '
-            f'Format="HDF">{name}:/surfaces/faces</DataItem></Topology>'
+            f'{_slab(name, "faces", 0, nfaces, 3, nfaces, "Int", 8, "surfaces")}</Topology>'
             f'<Geometry GeometryType="XYZ">'
             f'<DataItem ItemType="HyperSlab" Dimensions="{nverts} 3" Type="HyperSlab">'
             f'<DataItem Dimensions="3 3" Format="XML">{k} 0 0 1 1 1 1 {nverts} 3</DataItem>'
@@ -132,6 +156,9 @@ def write_contacts_xdmf(h5path: Path, times, starts, counts, rows: int,
            '<Grid Name="contacts" GridType="Collection" CollectionType="Temporal">']
     for t, a, n in zip(times, starts, counts, strict=True):
         a, n = int(a), int(n)
+        if n == 0:
+            out.append(_empty_grid(t))
+            continue
         out.append(
             f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
             f'<Topology TopologyType="Polyline" NodesPerElement="2" NumberOfElements="{n}">'
@@ -165,13 +192,8 @@ def write_solids_xdmf(h5path: Path, times, vstarts, vcounts, fstarts, fcounts,
            '<Grid Name="solids" GridType="Collection" CollectionType="Temporal">']
     for t, a, n, b, m in zip(times, vstarts, vcounts, fstarts, fcounts, strict=True):
         a, n, b, m = int(a), int(n), int(b), int(m)
-        if n == 0 or m == 0:  # (no clustered body: one point, no cell; a zero-size
-            # hyperslab makes the XDMF library print allocation errors)
-            out.append(f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
-                       f'<Topology TopologyType="Polyvertex" NumberOfElements="0"/>'
-                       f'<Geometry GeometryType="XYZ"><DataItem Dimensions="1 3" '
-                       f'NumberType="Float" Precision="8" Format="XML">0 0 0</DataItem>'
-                       f'</Geometry></Grid>')
+        if n == 0 or m == 0:  # (no clustered body)
+            out.append(_empty_grid(t))
             continue
         out.append(
             f'<Grid Name="frame" GridType="Uniform"><Time Value="{float(t):.17g}"/>'
