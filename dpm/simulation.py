@@ -388,15 +388,18 @@ class Simulation:
         self._prepared = False
         return law
 
-    def add_boundary(self, kind: str, material: Material, **params: Any) -> Boundary:
+    def add_boundary(self, kind: str | Boundary, material: Material | None = None,
+                     **params: Any) -> Boundary:
         """Add a boundary of a registered kind (``plane``, ``box``, ...); return it.
 
         Parameters
         ----------
-        kind : str
+        kind : str or Boundary
             a registered boundary name: the built-in kinds below, or a plugin's (``dpm
             plugins`` lists them; ``help(dpm.registry().lookup("boundary", kind))`` shows
-            one's parameters).
+            one's parameters); or a boundary built already
+            (``dpm.boundaries.Tube(steel, radius=0.05, length=1)``), added as it is (then
+            no ``material`` or parameters here).
         material : Material
             the boundary's material (its contact laws with the particles' materials are
             set by :meth:`contact`).
@@ -406,10 +409,27 @@ class Simulation:
             a value out of range raises :class:`~dpm.errors.ParameterError` naming the
             call, the parameter, its value and what is allowed.
         """
-        call = f"sim.add_boundary({kind!r})"
-        cls = self._registry.lookup("boundary", kind, call)
-        self._material_index(material, call)
-        b = cls(material, call=call, **params)
+        if isinstance(kind, Boundary):
+            b = kind
+            call = f"sim.add_boundary({type(b).__name__}(...))"
+            if params or (material is not None and material is not b.material):
+                given = ", ".join(["material"] * (material is not None) + sorted(params))
+                raise ParameterError(f"{call}: the boundary is built already (its material "
+                                     f"and parameters are its own); given also: {given}")
+            if any(b is other for other in self.boundaries):
+                raise ParameterError(f"{call}: this boundary was added already (boundary "
+                                     f"{next(k for k, o in enumerate(self.boundaries) if o is b)})")
+            self._material_index(b.material, call)
+        else:
+            call = f"sim.add_boundary({kind!r})"
+            if not isinstance(kind, str):
+                raise ParameterError(f"{call}: kind={kind!r}; allowed: a registered "
+                                     "boundary name or a Boundary object")
+            cls = self._registry.lookup("boundary", kind, call)
+            if material is None:
+                raise ParameterError(f"{call}: material is required (a dpm.Material)")
+            self._material_index(material, call)
+            b = cls(material, call=call, **params)
         self.boundaries.append(b)
         self._scene_box = None
         self._prepared = False

@@ -1,8 +1,9 @@
 """Which step module a run uses, what it says while one compiles, and compiling ahead.
 
 A scene's own step module (:func:`dpm.plan.step_module`) is the fastest code but compiles
-for about a minute the first time a combination of laws, integrator and boundary kinds
-is met. The universal module of the integrator (:mod:`dpm.universal_step`) runs every
+for 1-4 minutes (a 2-core machine) the first time a combination of laws, integrator and
+boundary kinds is met (announced with this machine's last compile time, reported every
+15 s while it compiles, and timed: :func:`compiling`). The universal module of the integrator (:mod:`dpm.universal_step`) runs every
 scene of built-in parts with the same results bit for bit, a little slower. With
 ``kernels="auto"`` (the default of :class:`dpm.backends.cpu.CpuBackend`):
 
@@ -124,12 +125,114 @@ _ANNOUNCED: set[str] = set()
 
 def _load_module(module: ModuleType, what: str) -> ModuleType:
     """``module``, saying (once) that it compiles at the first step if it was not
-    compiled before."""
+    compiled before, with this machine's last compile time of that kind as the
+    estimate; :func:`compiling` then reports while it compiles."""
     if not is_ready(module):
+        kind = "universal" if what == "the universal" else "scene"
+        _KIND[module.__name__] = (kind, what)
         _announce(module, f"compiling {what} step kernels (first run of this combination of "
-                  "contact laws, integrator and boundaries; about a minute, then cached). "
-                  "`dpm compile` once makes new scenes of built-in parts start in seconds.")
+                  f"contact laws, integrator and boundaries; {_estimate(kind)}, then "
+                  "cached). `dpm compile` once makes new scenes of built-in parts start "
+                  "in seconds.")
     return module
+
+
+#: seconds between the lines that say a compile is still going
+TICK_S = 15.0
+#: what :func:`_load_module` announced: module name -> (kind, words)
+_KIND: dict[str, tuple[str, str]] = {}
+#: when each announced compile began (the first call of its module)
+_BEGAN: dict[str, float] = {}
+
+
+def _times_file() -> Path:
+    from . import plan as _plan
+
+    return _plan.cache_dir() / "compile_times.json"
+
+
+def _recorded(kind: str) -> list[float]:
+    import json
+
+    try:
+        return [float(t) for t in json.loads(_times_file().read_text()).get(kind, [])]
+    except (OSError, ValueError, TypeError, AttributeError):
+        return []
+
+
+def _record(kind: str, seconds: float) -> None:
+    """Keep the last 5 compile times of ``kind`` on this machine (the next estimate)."""
+    import json
+
+    path = _times_file()
+    try:
+        data = json.loads(path.read_text())
+        if not isinstance(data, dict):
+            data = {}
+    except (OSError, ValueError):
+        data = {}
+    data[kind] = ([float(t) for t in data.get(kind, []) if isinstance(t, int | float)]
+                  + [round(seconds, 1)])[-5:]
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp.write_text(json.dumps(data))
+        os.replace(tmp, path)
+    except OSError:
+        tmp.unlink(missing_ok=True)
+
+
+def _estimate(kind: str) -> str:
+    """An honest estimate: this machine's recent compile times of the kind, else the
+    range measured on 2-core machines."""
+    times = sorted(_recorded(kind))
+    if times:
+        lo, hi = times[0], times[-1]
+        span = f"{lo:.0f} s" if hi - lo < 5 else f"{lo:.0f}-{hi:.0f} s"
+        return f"{span} the last time{'s' if len(times) > 1 else ''} on this machine"
+    return ("1-4 minutes on a 2-core machine" if kind == "scene"
+            else "3-5 minutes on a 2-core machine")
+
+
+@contextlib.contextmanager
+def compiling(module: ModuleType | None) -> Iterator[None]:
+    """Around the calls of a step module until its first call has compiled it: every
+    :data:`TICK_S` seconds a line says how long it has been compiling (against this
+    machine's last time); once the module is ready (:func:`mark_ready`), one line says how
+    long it took, and the time is kept for the next estimate. Silent for a module that
+    was compiled before, and inside :func:`quiet`."""
+    import threading
+
+    name = getattr(module, "__name__", None)
+    if name not in _KIND or _quiet():
+        yield
+        return
+    kind, what = _KIND[name]
+    began = _BEGAN.setdefault(name, time.perf_counter())
+    last = _recorded(kind)
+    stop = threading.Event()
+
+    def tick() -> None:
+        while not stop.wait(TICK_S):
+            so_far = time.perf_counter() - began
+            ref = f" (last time here: {max(last):.0f} s)" if last else ""
+            print(f"dpm: still compiling {what} step kernels: {so_far:.0f} s{ref}",
+                  file=sys.stderr, flush=True)
+
+    ticker = threading.Thread(target=tick, name="dpm-compile-ticker", daemon=True)
+    ticker.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        ticker.join()
+        if is_ready(module):
+            took = time.perf_counter() - began
+            del _KIND[name]
+            _BEGAN.pop(name, None)
+            _record(kind, took)
+            print(f"dpm: compiled {what} step kernels in {took:.0f} s (cached: the next run "
+                  "of this combination starts in seconds)", file=sys.stderr, flush=True)
 
 
 def _announce(module: ModuleType, text: str) -> None:

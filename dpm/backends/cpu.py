@@ -341,6 +341,10 @@ class CpuBackend(BackendBase):
         flags as they were (dt = 0: the contact pass would otherwise re-project tangential
         springs and mark contacts as begun, so that the steps after a prime differ from
         those of an uninterrupted run)."""
+        with warm.compiling(self.module):  # (the first forces compile the module)
+            self._prime()
+
+    def _prime(self) -> None:
         sim = self.sim
         b = sim.bodies
         self.vf[:] = b.velocity
@@ -361,7 +365,12 @@ class CpuBackend(BackendBase):
         stops the loop after the pre-force part of a step, the lists grow and the step is
         finished, so results do not depend on where a run is split into calls."""
         d = self.diag
-        self.module.run_steps(n, dt, *self.records(), d, frames)
+        if not self._compiled:  # (the first call compiles: said while it does)
+            with warm.compiling(self.module):
+                self.module.run_steps(n, dt, *self.records(), d, frames)
+                self._after_call()
+        else:
+            self.module.run_steps(n, dt, *self.records(), d, frames)
         ran = int(d[1])
         while d[0] in (STATUS_OVERFLOW, STATUS_WALL_OVERFLOW):
             self._grow(int(d[0]), int(d[3]))
