@@ -3,8 +3,9 @@
 A scene's own step module (:func:`dpm.plan.step_module`) is the fastest code but compiles
 for 1-4 minutes (a 2-core machine) the first time a combination of laws, integrator and
 boundary kinds is met (announced with this machine's last compile time, reported every
-15 s while it compiles, and timed: :func:`compiling`). The universal module of the integrator (:mod:`dpm.universal_step`) runs every
-scene of built-in parts with the same results bit for bit, a little slower. With
+15 s while it compiles, and timed: :func:`compiling`). The universal module of the
+integrator (:mod:`dpm.universal_step`) runs every scene of built-in parts with the same
+results bit for bit, a little slower. With
 ``kernels="auto"`` (the default of :class:`dpm.backends.cpu.CpuBackend`):
 
 1. the scene's own module when it has been compiled before (a marker beside the
