@@ -30,6 +30,7 @@ from .backends.base import (
 from .backends.cpu import threading_layer_advice
 from .boundaries.base import Boundary
 from .boundaries.joints import join_pipe_ends
+from .declared import Declared
 from .errors import OutputError, ParameterError
 from .flow import Inlet, Outlet
 from .guards import EnergyBook, Escaped, Guards
@@ -270,63 +271,23 @@ class Simulation:
         if self._forces_valid and math.isfinite(old):
             self.integrator.dt_changed(self, old)
 
-    @property
-    def gravity(self) -> np.ndarray:
-        """Gravitational acceleration [m/s2] (a 3-vector; may be changed between runs)."""
-        return self._gravity
+    gravity = Declared("Gravitational acceleration [m/s2] (a 3-vector; may be changed "
+                       "between runs).", convert=lambda v: np.asarray(v, float).copy())
+    skin = Declared("Verlet skin [m] (None: 0.2 x the smallest element diameter, set at "
+                    "the first run). Changing it rebuilds the neighbour lists before the "
+                    "next step.", after="_replan")
+    dt_check = Declared('What a too large time step does: "refuse", "warn" or "off".',
+                        convert=str, after="_recheck_dt", choices=DT_CHECKS)
+    max_overlap = Declared("Largest overlap / radius tolerated during a run before it "
+                           "stops as unstable.")
+    overlap_tolerance = Declared("Largest initial overlap / radius accepted for particles "
+                                 "when they are added.")
 
-    @gravity.setter
-    def gravity(self, value: Any) -> None:
-        v = validate("sim.gravity", {"gravity": self.parameters["gravity"]},
-                     {"gravity": value})
-        self._gravity = np.asarray(v["gravity"], float).copy()
-
-    @property
-    def skin(self) -> float | None:
-        """Verlet skin [m] (None: 0.2 x the smallest element diameter, set at the first
-        run). Changing it rebuilds the neighbour lists before the next step."""
-        return self._skin
-
-    @skin.setter
-    def skin(self, value: Any) -> None:
-        validate("sim.skin", {"skin": self.parameters["skin"]}, {"skin": value})
-        self._skin = None if value is None else float(value)
+    def _replan(self) -> None:
         self._prepared = False
 
-    @property
-    def dt_check(self) -> str:
-        """What a too large time step does: "refuse", "warn" or "off"."""
-        return self._dt_check
-
-    @dt_check.setter
-    def dt_check(self, value: Any) -> None:
-        if value not in DT_CHECKS:
-            raise ParameterError(f"sim.dt_check={value!r}; allowed: {', '.join(DT_CHECKS)}")
-        self._dt_check = value
+    def _recheck_dt(self) -> None:
         self._dt_checked = False
-
-    @property
-    def max_overlap(self) -> float:
-        """Largest overlap / radius tolerated during a run before it stops as unstable."""
-        return self._max_overlap
-
-    @max_overlap.setter
-    def max_overlap(self, value: Any) -> None:
-        validate("sim.max_overlap", {"max_overlap": self.parameters["max_overlap"]},
-                 {"max_overlap": value})
-        self._max_overlap = float(value)
-
-    @property
-    def overlap_tolerance(self) -> float:
-        """Largest initial overlap / radius accepted for particles when they are added."""
-        return self._overlap_tolerance
-
-    @overlap_tolerance.setter
-    def overlap_tolerance(self, value: Any) -> None:
-        validate("sim.overlap_tolerance",
-                 {"overlap_tolerance": self.parameters["overlap_tolerance"]},
-                 {"overlap_tolerance": value})
-        self._overlap_tolerance = float(value)
 
     @property
     def rank(self) -> int:

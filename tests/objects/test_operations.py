@@ -85,3 +85,23 @@ def test_bad_operations_are_refused_by_name(tmp_path):
     sim.operations.add(dpm.Callback(lambda s: None, every_steps=5))
     with pytest.raises(dpm.ParameterError, match="function"):
         sim.checkpoint_every(tmp_path / "c.h5", every_steps=10)
+
+
+def test_run_settings_are_declared_once():
+    """gravity, skin, dt_check, max_overlap, overlap_tolerance: one declaration each
+    (Simulation.parameters) checks the constructor's value and every later assignment
+    the same way, and converts it (dpm/declared.py)."""
+    sim = dpm.Simulation(dt=1e-5)
+    for name, bad in (("gravity", (1, 2)), ("skin", -1.0), ("max_overlap", 5.0),
+                      ("overlap_tolerance", -1.0)):
+        with pytest.raises(dpm.ParameterError) as at_init:
+            dpm.Simulation(dt=1e-5, **{name: bad})
+        with pytest.raises(dpm.ParameterError) as later:
+            setattr(sim, name, bad)
+        assert str(later.value).split(": ", 1)[1] == str(at_init.value).split(": ", 1)[1]
+    with pytest.raises(dpm.ParameterError, match="allowed: refuse, warn, off"):
+        sim.dt_check = "maybe"
+    sim.gravity = [0, 0, -9.81]
+    assert isinstance(sim.gravity, np.ndarray) and sim.gravity[2] == -9.81
+    sim.max_overlap = 1
+    assert type(sim.max_overlap) is float
