@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_output_ownership import small_scene
+from small_scene import small_scene
 
 import dpm
 from dpm import checkpoint as ckpt

@@ -202,7 +202,7 @@ def test_temporary_files_of_dead_writers_are_cleaned(tmp_path):
 KILLED_RUN = textwrap.dedent("""
     import os, signal, sys
     sys.path.insert(0, {here!r})
-    from test_output_ownership import small_scene
+    from small_scene import small_scene
     sim = small_scene()
     sim.output(sys.argv[1] + "/run.h5", every_steps=10)
     sim.checkpoint_every(sys.argv[1] + "/run.ckpt.h5", every_steps=20, keep=2)
@@ -215,7 +215,7 @@ def test_a_killed_runs_file_is_repaired_in_place(tmp_path):
     """A run killed with its output open for writing: the restart clears HDF5's "open for
     writing" flags in place (h5clear -s) instead of copying the file (same inode), and the
     run ends with every frame equal to the uninterrupted run's."""
-    p = subprocess.run([sys.executable, "-c", KILLED_RUN.format(here=str(HERE)),
+    p = subprocess.run([sys.executable, "-c", KILLED_RUN.format(here=str(HERE.parent)),
                         str(tmp_path)], capture_output=True, text=True, check=False)
     assert p.returncode == -9, p.stderr
     out = tmp_path / "run.h5"

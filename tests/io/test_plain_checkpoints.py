@@ -16,7 +16,8 @@ import shutil
 import h5py
 import numpy as np
 import pytest
-from test_output_ownership import first_run, small_scene
+from small_scene import small_scene
+from test_output_ownership import first_run
 
 import dpm
 from dpm import checkpoint as ckpt

@@ -1,5 +1,5 @@
 """A run that meets a full disk, for tests/io/test_disk_full.py: the small box scene of
-tests/io/test_output_ownership.py writes frames every 10 steps and checkpoints every 50; after
+tests/small_scene.py writes frames every 10 steps and checkpoints every 50; after
 200 steps the file-size limit of the process (RLIMIT_FSIZE, SIGXFSZ ignored: writes past it
 fail with EFBIG as they would with ENOSPC on a full disk) is set just above what is on disk.
 
@@ -18,9 +18,9 @@ import signal
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "io"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from test_output_ownership import small_scene  # noqa: E402
+from small_scene import small_scene  # noqa: E402
 
 import dpm  # noqa: E402
 
