@@ -436,6 +436,8 @@ def apply_scene_settings(sim: Simulation, scene: Simulation, source: str) -> lis
     said = []
     for name in CHANGEABLE:
         a, b = getattr(sim, name), getattr(scene, name)
+        if name == "skin" and b is None:
+            continue  # (not given: the run's own, set at its first step, stays)
         if a != b:
             setattr(sim, name, b)  # (each setter checks, as between runs)
             said.append(f"{name}: {a!r} -> {b!r} (from {source})")

@@ -1,5 +1,6 @@
-"""Command line: ``dpm run``, ``dpm plugins``, ``dpm xdmf``, ``dpm analyse``, ``dpm shapes``,
-``dpm validate``, ``dpm new-plugin``, ``dpm compile``, ``dpm clear-cache``, ``dpm advise``."""
+"""Command line: ``dpm run``, ``dpm sweep``, ``dpm plugins``, ``dpm xdmf``, ``dpm analyse``,
+``dpm shapes``, ``dpm validate``, ``dpm new-plugin``, ``dpm compile``, ``dpm clear-cache``,
+``dpm advise``."""
 
 from __future__ import annotations
 
@@ -20,22 +21,33 @@ def say(text: str) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    if args.reference is not None:
+        from .scene_reference import text
+
+        sys.stdout.write(text(args.reference or None))
+        return 0
+    if args.scene is None:
+        raise DpmError("dpm run: give a scene file (dpm run scene.toml), or --reference "
+                       "[TABLE] for its tables and keys")
     from .io.scene import load_scene
 
+    sets = args.set or ()
     if args.restart is not None:
         # the scene as the file describes it: the checkpoint must be of it, and the run
         # settings it changes (dt, max_overlap, output interval, ...) take effect
-        scene, run_kw = load_scene(args.scene, output=True, create_output=False)
+        scene, run_kw = load_scene(args.scene, output=True, create_output=False, sets=sets)
         from .checkpoint import apply_scene_settings, restart
 
         sim = restart(args.restart, scene=scene)
         changed = apply_scene_settings(sim, scene, args.scene)
+        changed += _scene_checkpoints(sim, scene, args.scene)
         say(f"restarted from step {sim.step_count} (t = {sim.time:.6g} s)")
         for line in changed:
             say(f"  {line}")
     else:
         try:
-            sim, run_kw = load_scene(args.scene, overwrite=True if args.overwrite else None)
+            sim, run_kw = load_scene(args.scene, overwrite=True if args.overwrite else None,
+                                     sets=sets)
         except ParameterError as exc:
             if "already exists and is kept" not in str(exc):
                 raise
@@ -48,9 +60,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise DpmError(f"{args.scene}: no [run] table and no --steps/--until given")
     if args.restart is not None and "steps" in run_kw:  # steps count from the start
         run_kw = {"steps": max(0, int(run_kw["steps"]) - sim.step_count)}
-    if args.checkpoint_every is not None:
-        base = args.checkpoint or str(Path(args.scene).with_suffix(".ckpt.h5").name)
-        sim.checkpoint_every(base, every=args.checkpoint_every)
+    ck = _checkpoints(sim)  # the scene file's [checkpoint] (or the checkpoint's own)
+    if args.checkpoint_every is not None or (args.checkpoint is not None and ck is not None):
+        # the command line wins over [checkpoint]: its interval, its path
+        base = args.checkpoint or (str(ck.base) if ck is not None else
+                                   str(Path(args.scene).with_suffix(".ckpt.h5").name))
+        every, every_steps = ((args.checkpoint_every, None) if args.checkpoint_every is not None
+                              else (ck.every, ck.every_steps))
+        sim.checkpoint_every(base, every=every, every_steps=every_steps,
+                             keep=ck.keep if ck is not None else 2)
     t0 = time.perf_counter()
     try:
         sim.run(**run_kw, progress=None if not args.no_progress else False)
@@ -64,6 +82,161 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if w is not None:
         say(f"output: {w.path} ({w.frames} frames) + {w.path.with_suffix('.xdmf').name}")
     return 0
+
+
+def _checkpoints(sim: object) -> object | None:
+    """The periodic-checkpoint schedule of ``sim`` (None: none)."""
+    return getattr(getattr(sim, "operations", None), "checkpoints", None)
+
+
+def _scene_checkpoints(sim: object, scene: object, source: str) -> list[str]:
+    """After a restart: the scene file's [checkpoint] interval takes effect where it
+    differs from the restored run's (whose base name, perhaps moved beside a copied
+    checkpoint, is kept); a line for the change."""
+    theirs, mine = _checkpoints(scene), _checkpoints(sim)
+    if theirs is None:
+        return []
+    want = (theirs.every, theirs.every_steps, theirs.keep)
+    if mine is not None and (mine.every, mine.every_steps, mine.keep) == want:
+        return []
+    base = mine.base if mine is not None else theirs.base
+    sim.checkpoint_every(base, every=theirs.every, every_steps=theirs.every_steps,
+                         keep=theirs.keep)
+    every = (f"every {theirs.every:g} s" if theirs.every is not None
+             else f"every {theirs.every_steps} steps")
+    return [f"checkpoints: {every}, the last {theirs.keep} kept, to {base} (from {source})"]
+
+
+# ---- dpm sweep -------------------------------------------------------------------------
+
+#: the end quantities of a sweep's table: (column, key of a run's result, format)
+SWEEP_COLUMNS = (("steps", "steps", "d"), ("t [s]", "time", ".4g"), ("wall [s]", "wall", ".1f"),
+                 ("particles", "particles", "d"), ("KE [J]", "kinetic_energy", ".4g"),
+                 ("mean z [m]", "mean_z", ".4g"))
+
+
+def _sweep_run(scene: str, sets: list[str], run_kw: dict) -> dict:
+    """One run of a sweep (in a worker process): the scene with the edits ``sets``, run
+    for ``run_kw`` (empty: its [run]); its end quantities, or its error."""
+    import math
+
+    t0 = time.perf_counter()
+    try:
+        from .io.scene import load_scene
+
+        sim, own = load_scene(scene, sets=sets)
+        run_kw = run_kw or own
+        if not run_kw:
+            raise DpmError(f"{scene}: no [run] table and no --steps/--until given")
+        try:
+            sim.run(**run_kw, progress=False)
+        finally:
+            sim.close()
+        z = sim.bodies.position[:, 2]
+        return {"steps": sim.step_count, "time": sim.time, "wall": time.perf_counter() - t0,
+                "particles": len(sim.bodies), "kinetic_energy": sim.kinetic_energy(),
+                "mean_z": float(z.mean()) if len(z) else math.nan,
+                "output": "" if sim.last_output is None else str(sim.last_output.path),
+                "error": ""}
+    except Exception as exc:  # one run's failure is its row of the table, not the sweep's
+        return {"wall": time.perf_counter() - t0, "error": f"{type(exc).__name__}: {exc}"}
+
+
+def _label(words: list[tuple[str, str]]) -> str:
+    """``friction=0.3-dt=1e-05``: a run's values as a file name's part."""
+    import re
+
+    return "-".join(f"{k}={re.sub(r'[^A-Za-z0-9.+_-]+', '_', v).strip('_')}"
+                    for k, v in words) or "run"
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    import csv
+    import itertools
+    import json
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    from .scene_file import parse_path, read_scene, split_values
+
+    if args.jobs < 1:
+        raise ParameterError(f"dpm sweep: --jobs {args.jobs}; allowed: an integer >= 1")
+    axes: list[tuple[str, list[str]]] = []
+    for text in args.set:
+        if "=" not in text:
+            raise ParameterError(f"dpm sweep: --set {text!r}: write PATH=V1,V2,... "
+                                 "(contacts[0].friction=0.2,0.3)")
+        path, values = (x.strip() for x in text.split("=", 1))
+        try:
+            parse_path(path)
+        except ParameterError as exc:
+            raise ParameterError(f"dpm sweep: --set {text}: {exc}") from None
+        axes.append((path, split_values(values)))
+    swept = [(p, v) for p, v in axes if len(v) > 1]
+    lasts = [p.rsplit(".", 1)[-1] for p, _ in swept]
+    short = {p: (last if lasts.count(last) == 1 else p)
+             for (p, _), last in zip(swept, lasts, strict=True)}
+    combos = list(itertools.product(*[[(p, v) for v in values] for p, values in axes]))
+    scene = Path(args.scene)
+    # every combination checked before any run: a bad path or value is refused now
+    docs = [read_scene(scene, [f"{p}={v}" for p, v in c]) for c in combos]
+    stem = Path(docs[0].get("output", {}).get("path", scene.name)).stem
+    out = Path(args.out)
+    runs, labels, existing = [], set(), []
+    for k, (combo, doc) in enumerate(zip(combos, docs, strict=True)):
+        label = _label([(short[p], v) for p, v in combo if p in short])
+        if label in labels:
+            label = f"{label}-{k}"
+        labels.add(label)
+        sets = [f"{p}={v}" for p, v in combo]
+        target = None
+        if "output" in doc:
+            target = out / f"{stem}-{label}.h5"
+            sets += [f"output.path={json.dumps(str(target))}",
+                     f"output.overwrite={'true' if args.overwrite else 'false'}"]
+            if target.exists() and not args.overwrite:
+                existing.append(str(target))
+        if "checkpoint" in doc:
+            sets.append(f"checkpoint.path={json.dumps(str(out / f'{stem}-{label}.ckpt.h5'))}")
+        runs.append((combo, sets, target))
+    if existing:
+        raise ParameterError(f"dpm sweep: {len(existing)} output file(s) already exist and "
+                             f"are kept: {', '.join(existing)} (dpm sweep --overwrite "
+                             "replaces them)")
+    out.mkdir(parents=True, exist_ok=True)
+    run_kw = ({"steps": args.steps} if args.steps is not None
+              else {"until": args.until} if args.until is not None else {})
+    results: list[dict] = [{}] * len(runs)
+    say(f"{len(runs)} run(s) of {scene} on {min(args.jobs, len(runs))} process(es)")
+    t0 = time.perf_counter()
+    spawn = multiprocessing.get_context("spawn")  # (fresh workers: no forked threads)
+    with ProcessPoolExecutor(max_workers=min(args.jobs, len(runs)), mp_context=spawn) as pool:
+        todo = {pool.submit(_sweep_run, str(scene), sets, run_kw): k
+                for k, (_, sets, _) in enumerate(runs)}
+        for done, fut in enumerate(as_completed(todo), 1):
+            k = todo[fut]
+            results[k] = fut.result()
+            what = results[k]["error"] or f"{results[k]['wall']:.1f} s"
+            print(f"[{done}/{len(runs)}] {', '.join(f'{p}={v}' for p, v in runs[k][0])}: "
+                  f"{what}", file=sys.stderr, flush=True)
+    head = [p for p, _ in axes] + [c for c, _, _ in SWEEP_COLUMNS] + ["output"]
+    table = []
+    for (combo, _, _), r in zip(runs, results, strict=True):
+        row = [v for _, v in combo]
+        for _, key, f in SWEEP_COLUMNS:
+            row.append(format(r[key], f) if key in r else "-")
+        row.append(r.get("output") or ("error: " + r["error"] if r["error"] else "-"))
+        table.append(row)
+    w = [max(len(str(x)) for x in col) for col in zip(head, *table, strict=True)]
+    for row in [head, *table]:
+        say("  ".join(f"{str(x):<{w[i]}}" for i, x in enumerate(row[:-1])) + "  " + row[-1])
+    failed = sum(bool(r["error"]) for r in results)
+    say(f"{len(runs)} run(s) in {time.perf_counter() - t0:.1f} s"
+        + (f"; {failed} failed" if failed else ""))
+    if args.csv:
+        with open(args.csv, "w", newline="", encoding="utf-8") as f:
+            csv.writer(f).writerows([head, *table])
+    return 1 if failed else 0
 
 
 def summary_of(obj: object) -> str:
@@ -200,14 +373,54 @@ def _cmd_advise(args: argparse.Namespace) -> int:
     return 0
 
 
+_RUN_EPILOG = """\
+The tables of a scene file (dpm run --reference TABLE prints one's keys, with units,
+defaults and ranges; docs/scene-files.md has them all):
+{tables}
+
+A number goes in the key's unit; a string is a quantity converted to it: "2 mm",
+"30 deg", "5e6 Pa", "sin(30 deg)", "2 mm / 2" (dpm run --reference units). A
+value of another dimension is refused by name.
+
+examples:
+  dpm run examples/box_settle.toml --steps 2000
+  dpm run scene.toml --set contacts[0].friction=0.3 --set simulation.dt=1e-5
+  dpm run --reference boundaries.tube
+  dpm sweep scene.toml --set contacts[0].friction=0.2,0.3,0.4 --jobs 2
+"""
+
+
+class _RunHelp(argparse.RawDescriptionHelpFormatter):
+    """``dpm run --help``: the tables of a scene file listed in the epilog (made only
+    when the help is shown)."""
+
+    def add_text(self, text: str | None) -> None:
+        if text and "{tables}" in text:
+            from .scene_reference import index
+
+            text = text.replace("{tables}", index())
+        super().add_text(text)
+
+
 def main(argv: list[str] | None = None) -> int:
     from .plugins import version
 
     p = argparse.ArgumentParser(prog="dpm", description="Discrete Particle Method (DEM)")
     p.add_argument("--version", action="version", version=f"dpm {version()}")
     sub = p.add_subparsers(dest="command", required=True)
-    r = sub.add_parser("run", help="run a TOML scene file")
-    r.add_argument("scene")
+    r = sub.add_parser("run", help="run a TOML scene file", formatter_class=_RunHelp,
+                       description="Build the scene a TOML file describes and run it "
+                       "(every table and key:\ndocs/scene-files.md, or --reference).",
+                       epilog=_RUN_EPILOG)
+    r.add_argument("scene", nargs="?", help="the scene file")
+    r.add_argument("--set", action="append", default=[], metavar="PATH=VALUE",
+                   help="change a value of the file before it is checked and built "
+                   "(repeatable): contacts[0].friction=0.3, simulation.dt=1e-5, "
+                   "'particles[0].radius=2 mm'; VALUE is a TOML value or else text")
+    r.add_argument("--reference", nargs="?", const="", default=None, metavar="TABLE",
+                   help="print the tables and keys of a scene file (with units, defaults "
+                   "and ranges) and exit; TABLE: one of them (boundaries, "
+                   "boundaries.box, units)")
     g = r.add_mutually_exclusive_group()
     g.add_argument("--steps", type=int, help="override the scene's [run]")
     g.add_argument("--until", type=float, help="override the scene's [run] (seconds)")
@@ -222,10 +435,35 @@ def main(argv: list[str] | None = None) -> int:
                    "restarted elsewhere leaves the original's files alone and writes no "
                    "output)")
     r.add_argument("--checkpoint-every", type=float, default=None, metavar="SECONDS",
-                   help="write checkpoints every SECONDS of simulated time")
+                   help="write checkpoints every SECONDS of simulated time (wins over the "
+                   "file's [checkpoint])")
     r.add_argument("--checkpoint", default=None, metavar="PATH",
-                   help="base name of the checkpoints (default: SCENE.ckpt.h5)")
+                   help="base name of the checkpoints (default: [checkpoint] path, else "
+                   "SCENE.ckpt.h5)")
     r.set_defaults(func=_cmd_run)
+    sw = sub.add_parser("sweep", help="run a scene file for every combination of values "
+                        "(--set PATH=V1,V2,...) on a pool of processes; print a table of "
+                        "the results", description="Run a TOML scene file once for every "
+                        "combination of the values of its --set options (their product), "
+                        "each run in a worker process with its own output file "
+                        "(OUT/SCENE-KEY=VALUE.h5); print the values with each run's steps, "
+                        "simulated and wall time, particles, kinetic energy and mean "
+                        "height. Exit status 1 if a run failed (its row says why).")
+    sw.add_argument("scene", help="the scene file")
+    sw.add_argument("--set", action="append", default=[], required=True,
+                    metavar="PATH=V1[,V2...]", help="the values of a key (repeatable; "
+                    "commas inside brackets or quotes do not split): "
+                    "contacts[0].friction=0.2,0.3,0.4")
+    sw.add_argument("--jobs", type=int, default=1, help="runs at once, each in its own "
+                    "process (default 1)")
+    gs = sw.add_mutually_exclusive_group()
+    gs.add_argument("--steps", type=int, help="override the scene's [run]")
+    gs.add_argument("--until", type=float, help="override the scene's [run] (seconds)")
+    sw.add_argument("--out", default=".", metavar="DIR", help="folder of the runs' output "
+                    "files (default: here)")
+    sw.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    sw.add_argument("--csv", default=None, metavar="FILE", help="also write the table as CSV")
+    sw.set_defaults(func=_cmd_sweep)
     pl = sub.add_parser("plugins", help="list every registered shape, boundary, impact model, "
                         "integrator, backend, motion, region and rolling model")
     pl.add_argument("-v", "--verbose", action="store_true", help="with each one's class")

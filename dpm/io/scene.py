@@ -1,5 +1,12 @@
 """TOML scene files: the Python API written down (``dpm run scene.toml``).
 
+Every table and key, with its unit, default and range, is in docs/scene-files.md and
+``dpm run --reference [TABLE]`` (both rendered by :mod:`dpm.scene_reference` from the
+declarations the checks use). A string where a number goes is a quantity with units or an
+expression, converted to the key's unit: ``radius = "2 mm"``, ``young = "5 MPa"``,
+``angle = "30 deg"``, ``amplitude = [0, 0, "sin(30 deg) * 2 mm"]`` (:mod:`dpm.units`).
+``dpm run scene.toml --set contacts[0].friction=0.3`` changes a value before the checks.
+
 Layout (every table mirrors a call; keys are the call's keyword arguments)::
 
     [simulation]                 # dpm.Simulation(...)
@@ -65,12 +72,18 @@ Layout (every table mirrors a call; keys are the call's keyword arguments)::
 
     [run]                        # sim.run(...)
     until = 0.2
+
+    [checkpoint]                 # sim.checkpoint_every(...) (dpm run --checkpoint-every wins)
+    every = 0.05                 # or every_steps
+    path = "run.ckpt.h5"         # numbered files beside it; keep = 2 (the last ones kept)
 """
 
 from __future__ import annotations
 
 import re
 import warnings
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -83,7 +96,38 @@ from ..scene_tools import lattice
 from ..simulation import Simulation
 
 _TOP = {"simulation", "materials", "contacts", "boundaries", "particles", "output", "run",
-        "periodic", "inlets", "outlets"}
+        "periodic", "inlets", "outlets", "checkpoint"}
+#: the first name=value of a call's message: the key it is about
+_KEY = re.compile(r"\b([A-Za-z_]\w*)=(?!=)")
+
+
+def _located(path: Path, lines: list[str], sets: Sequence[str] = ()):
+    """A context manager factory: ``with at("boundaries[1]"):`` re-raises a ParameterError
+    of the calls that build that table with the file, the table and the line of the key
+    the message names (else of the table's header), or the ``--set`` edit that gave it, on
+    each of its lines."""
+    from ..scene_file import edit_table, origin
+
+    edits = [edit_table(s) for s in sets]
+
+    @contextmanager
+    def at(where: str) -> Iterator[None]:
+        try:
+            yield
+        except ParameterError as exc:
+            out = []
+            for msg in str(exc).split("\n"):
+                if msg.startswith(f"{path}:"):
+                    out.append(msg)
+                    continue
+                m = _KEY.search(msg)
+                out.append(f"{path}: {where}: {msg}"
+                           + origin(lines, where, m.group(1) if m else None, edits))
+            raise ParameterError("\n".join(out)) from None
+
+    return at
+
+
 def _motion(where: str, spec: Any) -> Any:
     """A motion table ``{ type = "name", ... }`` (a registered motion, built-in or a
     plugin's), or a list of them (composed, applied in order)."""
@@ -139,20 +183,29 @@ def _csv(where: str, name: str, base: Path) -> np.ndarray:
 
 
 def load_scene(path: str | Path, output: bool = True, overwrite: bool | None = None,
-               create_output: bool = True) -> tuple[Simulation, dict[str, Any]]:
+               create_output: bool = True, sets: Sequence[str] = ()
+               ) -> tuple[Simulation, dict[str, Any]]:
     """Build the Simulation a TOML scene describes; return it and the ``[run]`` arguments.
 
-    The file, its tables and their keys are checked first (:func:`dpm.scene_file.read_scene`).
-    ``output=False`` leaves the ``[output]`` table out (a restart goes on writing the file
-    of the checkpoint); ``overwrite`` (when not None) overrides its ``overwrite`` key.
-    ``create_output=False`` records the ``[output]`` settings without the checks of a file
-    to create (``dpm run --restart`` compares them with the checkpoint's run)."""
+    The file, its tables and their keys are checked first, the edits ``sets``
+    (``"PATH=VALUE"``, as ``dpm run --set``) applied before, the quantities converted to
+    the keys' units (:func:`dpm.scene_file.read_scene`). A value a call refuses while the
+    scene is built is named with the file, the table and the line.
+    ``output=False`` leaves the ``[output]`` and ``[checkpoint]`` tables out (a restart
+    goes on writing the file of the checkpoint; ``dpm advise``'s pilot runs write
+    nothing); ``overwrite`` (when not None) overrides the ``overwrite`` key of
+    ``[output]``. ``create_output=False`` records the ``[output]`` settings without the
+    checks of a file to create (``dpm run --restart`` compares them with the checkpoint's
+    run). ``[checkpoint]`` calls :meth:`~dpm.Simulation.checkpoint_every`."""
     from ..scene_file import read_scene
 
     path = Path(path)
-    doc = read_scene(path)
+    doc = read_scene(path, sets)
+    text = path.read_text(encoding="utf-8")
+    at = _located(path, text.splitlines(), sets)
     if not output:
         doc.pop("output", None)
+        doc.pop("checkpoint", None)
     elif overwrite is not None and "output" in doc:
         doc["output"] = dict(doc["output"], overwrite=bool(overwrite))
     target = doc.get("output", {}).get("path", path.with_suffix(".h5").name)
@@ -164,12 +217,17 @@ def load_scene(path: str | Path, output: bool = True, overwrite: bool | None = N
         raise ParameterError(f"{path}: unknown table(s) {unknown}; allowed: {sorted(_TOP)}")
     if "simulation" not in doc:
         raise ParameterError(f"{path}: the [simulation] table (with dt) is required")
-    sim = Simulation(**doc["simulation"])
-    # the scene file's text goes into the output file (run.scene_toml)
-    sim._scene_source = (str(path), path.read_text(encoding="utf-8"))
+    with at("[simulation]"):
+        sim = Simulation(**doc["simulation"])
+    # the scene file's text goes into the output file (run.scene_toml), with the edits
+    if sets:
+        text += ("\n# edited on the command line (dpm run FILE --set ...):\n"
+                 + "".join(f"# --set {s}\n" for s in sets))
+    sim._scene_source = (str(path), text)
     mats: dict[str, Material] = {}
     for name, kw in doc.get("materials", {}).items():
-        mats[name] = Material(name, **kw)
+        with at(f"[materials.{name}]"):
+            mats[name] = Material(name, **kw)
 
     def mat(where: str, name: Any) -> Material:
         if name not in mats:
@@ -182,34 +240,41 @@ def load_scene(path: str | Path, output: bool = True, overwrite: bool | None = N
         pair = c.pop("materials", None)
         if not isinstance(pair, list) or len(pair) != 2:
             raise ParameterError(f"{path}: contacts[{k}]: materials must be a list of two names")
-        sim.contact(mat(f"contacts[{k}]", pair[0]), mat(f"contacts[{k}]", pair[1]), **c)
+        a, b = mat(f"contacts[{k}]", pair[0]), mat(f"contacts[{k}]", pair[1])
+        with at(f"contacts[{k}]"):
+            sim.contact(a, b, **c)
     for k, b in enumerate(doc.get("boundaries", [])):
         b = dict(b)
         kind = b.pop("kind", None)
         m = mat(f"boundaries[{k}]", b.pop("material", None))
         if "motion" in b:
-            b["motion"] = _motion(f"{path}: boundaries[{k}]", b["motion"])
+            with at(f"boundaries[{k}]: motion"):
+                b["motion"] = _motion(f"{path}: boundaries[{k}]", b["motion"])
         if kind == "mesh" and "file" in b:
             b["file"] = str(path.parent / b["file"])
         off, on = b.pop("switch_off", None), b.pop("switch_on", None)
-        bd = sim.add_boundary(kind, material=m, **b)
-        if off is not None:
-            sim.switch_off(bd, at=off)
-        if on is not None:
-            sim.switch_on(bd, at=on)
-    for per in doc.get("periodic", []):
-        sim.set_periodic(**per)
+        with at(f"boundaries[{k}]"):
+            bd = sim.add_boundary(kind, material=m, **b)
+            if off is not None:
+                sim.switch_off(bd, at=off)
+            if on is not None:
+                sim.switch_on(bd, at=on)
+    for k, per in enumerate(doc.get("periodic", [])):
+        with at(f"periodic[{k}]"):
+            sim.set_periodic(**per)
     for k, spec in enumerate(doc.get("inlets", [])):
         spec = dict(spec)
         m = mat(f"inlets[{k}]", spec.pop("material", None))
-        region = _region(f"{path}: inlets[{k}]", spec.pop("region", None))
-        spec = {key: (tuple(v) if isinstance(v, list) and key != "shapes" else v)
-                for key, v in spec.items()}
-        sim.add_inlet(region, m, **spec)
+        with at(f"inlets[{k}]"):
+            region = _region(f"{path}: inlets[{k}]", spec.pop("region", None))
+            spec = {key: (tuple(v) if isinstance(v, list) and key != "shapes" else v)
+                    for key, v in spec.items()}
+            sim.add_inlet(region, m, **spec)
     for k, spec in enumerate(doc.get("outlets", [])):
         spec = dict(spec)
-        region = _region(f"{path}: outlets[{k}]", spec.pop("region", None))
-        sim.add_outlet(region, **spec)
+        with at(f"outlets[{k}]"):
+            region = _region(f"{path}: outlets[{k}]", spec.pop("region", None))
+            sim.add_outlet(region, **spec)
     for k, p in enumerate(doc.get("particles", [])):
         p = dict(p)
         shape = p.pop("shape", "sphere")
@@ -226,14 +291,21 @@ def load_scene(path: str | Path, output: bool = True, overwrite: bool | None = N
             if data.shape[1] >= 7 and shape == "sphere" and "radius" not in p:
                 p["radius"] = data[:, 6]
         elif "lattice" in p:
-            p["positions"] = lattice(**p.pop("lattice"))
-        sim.add_particles(shape, material=m, **p)
+            with at(f"particles[{k}]: lattice"):
+                p["positions"] = lattice(**p.pop("lattice"))
+        with at(f"particles[{k}]"):
+            sim.add_particles(shape, material=m, **p)
     if "output" in doc:
         out = dict(doc["output"])
         # inputs (csv) are relative to the scene file, the output to the working directory
         keep = out.pop("overwrite", False)
-        sim.output(out.pop("path", path.with_suffix(".h5").name),
-                   overwrite=keep if create_output else True, **out)
+        with at("[output]"):
+            sim.output(out.pop("path", path.with_suffix(".h5").name),
+                       overwrite=keep if create_output else True, **out)
         if not create_output:
             sim._output_overwrite = bool(keep)
+    if "checkpoint" in doc:
+        ck = dict(doc["checkpoint"])
+        with at("[checkpoint]"):
+            sim.checkpoint_every(ck.pop("path", path.with_suffix(".ckpt.h5").name), **ck)
     return sim, dict(doc.get("run", {}))
