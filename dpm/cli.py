@@ -479,7 +479,8 @@ def main(argv: list[str] | None = None) -> int:
     a.add_argument("--residence", nargs="*", metavar="KEY=VALUE",
                    help="residence time distribution (outlet=K, mass=1, bins=N)")
     a.add_argument("--flow", nargs="+", metavar="KEY=VALUE",
-                   help="mass flow rate through a plane (z=0.0 [normal=0,0,-1] [bin=S]) or "
+                   help="mass flow rate through a plane (z=0.0 [normal=0,0,-1; default: along "
+                   "gravity] [bin=S]) or "
                    "out of the outlets (outlet[=K] bin=S)")
     a.add_argument("--energy", action="store_true", help="kinetic energy of every frame")
     a.add_argument("--thermo", action="store_true", help="the /thermo table")

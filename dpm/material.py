@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from .parameters import Parameter, validate
+from .parameters import Parameter, declared_repr, validate
 
 
 class Material:
@@ -65,8 +65,11 @@ class Material:
         return math.pi * radius * math.sqrt(self.density / g) / (0.1631 * self.poisson + 0.8766)
 
     def __repr__(self) -> str:
-        return (f"Material({self.name!r}, density={self.density:g}, young={self.young}, "
-                f"poisson={self.poisson})")
+        """``Material('glass', density=2500, young=5000000, poisson=0.45)`` (the elastic
+        constants only where given)."""
+        return declared_repr("Material", self.parameters,
+                             {k: getattr(self, k, None) for k in self.parameters},
+                             leading=[repr(getattr(self, "name", "?"))])
 
 
 def effective_young(a: Material, b: Material) -> float:

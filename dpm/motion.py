@@ -21,7 +21,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .errors import ParameterError
-from .parameters import Parameter, validate
+from .parameters import Parameter, declared_repr, shown, validate
 
 
 def _rodrigues(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
@@ -36,7 +36,7 @@ def _unit(call: str, name: str, v: Sequence[float]) -> np.ndarray:
     a = np.asarray(v, float)
     n = float(np.linalg.norm(a))
     if n == 0.0:
-        raise ParameterError(f"{call}: {name}={tuple(a)} must not be zero")
+        raise ParameterError(f"{call}: {name}={shown(v)} must not be zero")
     return a / n
 
 
@@ -60,6 +60,12 @@ class Motion:
 
     def __init__(self, **params: Any) -> None:
         self.params = validate(f"{type(self).__name__}()", self.parameters, params)
+
+    def __repr__(self) -> str:
+        """``Rotation(axis=(0, 1, 0), rpm=30)``: the declared parameters given (required
+        ones and those that differ from their default)."""
+        return declared_repr(type(self).__name__, self.parameters,
+                             getattr(self, "params", {}))
 
     def pose(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(R (n, 3, 3), o (n, 3)) at the times ``t`` (n,)."""
@@ -99,6 +105,9 @@ class Compose(Motion):
         pivots = [m.pivot for m in motions if m.pivot is not None]
         self.pivot = pivots[0] if pivots else None
         self.time_scale = min(m.time_scale for m in motions)
+
+    def __repr__(self) -> str:
+        return f"Compose({', '.join(repr(m) for m in self.motions)})"
 
     def pose(self, t):
         r, o = self.motions[0].pose(t)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -54,26 +54,26 @@ class Parameter:
         if self.kind == "bool":
             if isinstance(value, bool | np.bool_):
                 return []
-            return [f"{name}={value!r}; allowed: True or False"]
+            return [f"{name}={shown(value)}; allowed: True or False"]
         if self.kind == "any":
             return []
         if self.kind == "str":
             if isinstance(value, str | os.PathLike):
                 return []
-            return [f"{name}={value!r} must be a string"]
+            return [f"{name}={shown(value)} must be a string"]
         unit = f" [{self.unit}]" if self.unit else ""
         if self.kind == "vector":
             arr = numeric_array(value)
             if arr is None or arr.shape != (3,):
-                return [f"{name}={value!r} must be a 3-vector of numbers{unit}"]
+                return [f"{name}={shown(value)} must be a 3-vector of numbers{unit}"]
             if np.any(np.isnan(arr)) or (not self.allow_inf and np.any(np.isinf(arr))):
-                return [f"{name}={value!r} contains NaN or inf; allowed: 3 finite "
+                return [f"{name}={shown(value)} contains NaN or inf; allowed: 3 finite "
                         f"numbers{unit}"]
             return []
         what = "an integer" if self.kind == "int" else "a number"
         arr = numeric_array(value)
         if arr is None:
-            return [f"{name}={value!r} is not {what}; allowed: {what} in "
+            return [f"{name}={shown(value)} is not {what}; allowed: {what} in "
                     f"{self.interval()}{unit}"]
         if arr.ndim > (1 if self.array else 0):
             return [f"{name} has shape {arr.shape}; allowed: a scalar"
@@ -96,10 +96,10 @@ class Parameter:
         bad = bad_low | bad_high
         if np.any(bad):
             if flat.size == 1:
-                shown = _show(value)
+                echo = _show(value)
             else:
-                shown = f"{_fmt(float(flat[bad][0]))} (item {int(np.argmax(bad))})"
-            return [f"{name}={shown} is outside {self.interval()}"]
+                echo = f"{_fmt(float(flat[bad][0]))} (item {int(np.argmax(bad))})"
+            return [f"{name}={echo} is outside {self.interval()}"]
         return []
 
 
@@ -145,6 +145,82 @@ def _fmt(x: float) -> str:
     return f"{x:g}"
 
 
+#: items of a sequence a message shows before it cuts the rest
+SHOWN_ITEMS = 8
+
+
+def shown(value: Any, digits: int | None = None) -> str:
+    """``repr(value)`` for a message, with numpy's scalars and arrays shown as plain
+    numbers: ``(0.1, 0.2)``, not ``(np.float64(0.1), np.float64(0.2))`` nor
+    ``array([0.1, 0.2])`` (a 1-D array as a tuple, a 2-D one as a list of them); tuples
+    and lists are followed inside, and those of more than :data:`SHOWN_ITEMS` items cut
+    (``(1.0, 2.0, ..., (100 items))``). ``digits``: floats with at most that many
+    significant digits, as ``format(x, "g")`` writes them (``2500``, ``5e+06``)."""
+    if isinstance(value, bool | np.bool_):
+        return str(bool(value))
+    if digits is not None and isinstance(value, float | np.floating):
+        return format(float(value), f".{digits}g")
+    if isinstance(value, np.number):
+        return str(value)  # (numpy's shortest digits of its own precision: float32 0.1)
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, os.PathLike):
+        return repr(os.fspath(value))
+    if isinstance(value, np.ndarray):
+        if value.ndim == 0:
+            return shown(value.item(), digits)
+        brackets = "()" if value.ndim == 1 else "[]"
+    elif type(value) is tuple:
+        brackets = "()"
+    elif type(value) is list:
+        brackets = "[]"
+    else:
+        return repr(value)
+    parts = [shown(v, digits) for v in value[:SHOWN_ITEMS]]
+    if len(value) > SHOWN_ITEMS:
+        parts.append(f"... ({len(value)} items)")
+    elif brackets == "()" and len(parts) == 1:
+        parts[0] += ","
+    return brackets[0] + ", ".join(parts) + brackets[1]
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Whether a parameter's value is its default (numbers and arrays by value)."""
+    if a is b:
+        return True
+    if a is None or b is None:
+        return False
+    x, y = numeric_array(a), numeric_array(b)
+    if x is not None and y is not None:
+        return x.shape == y.shape and bool(np.all(x == y))
+    try:
+        return bool(a == b)
+    except (TypeError, ValueError):
+        return False
+
+
+def declared_repr(name: str, parameters: Mapping[str, Parameter], values: Mapping[str, Any],
+                  leading: Sequence[str] = (), trailing: Sequence[str] = ()) -> str:
+    """``Name(lead, p=v, ..., trail)``: an object by its declared parameters, each required
+    one and each that differs from its default, numbers with 12 significant digits
+    (``Tube(material='steel', length=1, radius=0.05)``); an array of more than one
+    dimension or of more than :data:`SHOWN_ITEMS` items by its shape only."""
+    parts = list(leading)
+    for key, p in parameters.items():
+        if key not in values:
+            continue
+        v = values[key]
+        if p.default is not REQUIRED and _same(v, p.default):
+            continue
+        arr = numeric_array(v) if not isinstance(v, str | os.PathLike) else None
+        if arr is not None and (arr.ndim > 1 or arr.size > SHOWN_ITEMS):
+            parts.append(f"{key}=<array of shape {arr.shape}>")
+        else:
+            parts.append(f"{key}={shown(v, digits=12)}")
+    parts += list(trailing)
+    return f"{name}({', '.join(parts)})"
+
+
 def _show(value: Any, exact: bool = False) -> str:
     if isinstance(value, float | int | np.floating | np.integer):
         return repr(float(value)) if exact else f"{float(value):g}"
@@ -152,8 +228,8 @@ def _show(value: Any, exact: bool = False) -> str:
         try:
             return f"{float(value):g}"
         except (TypeError, ValueError):
-            return repr(value)
-    return repr(value)
+            return shown(value)
+    return shown(value)
 
 
 def validate(call: str, spec: Mapping[str, Parameter], given: Mapping[str, Any]) -> dict[str, Any]:
@@ -166,7 +242,7 @@ def validate(call: str, spec: Mapping[str, Parameter], given: Mapping[str, Any])
     if unknown:
         allowed = ", ".join(sorted(spec)) or "none"
         for k in unknown:
-            problems.append(f"unknown parameter {k}={given[k]!r}; allowed: {allowed}")
+            problems.append(f"unknown parameter {k}={shown(given[k])}; allowed: {allowed}")
     out: dict[str, Any] = {}
     for name, p in spec.items():
         if name in given and given[name] is not None:

@@ -4,7 +4,9 @@ What can meet is resolved here, once: the materials of the particles and of ever
 inlet will bring, the shapes inlets draw (names and parameters), the material pairs that
 need a contact law (particle-particle only where two bodies of those materials can exist,
 particle-boundary for every boundary), particles outside boundaries, NaN in the state,
-initial overlaps and the periodic box.
+initial overlaps and the periodic box. What runs but is most likely a slip (a modulus in
+GPa, a mesh in mm, a drum turning about a centre off its axis, particles larger than their
+container) is warned about here too, once per scene (:mod:`dpm.plausibility`).
 """
 
 from __future__ import annotations
@@ -136,6 +138,11 @@ def validate_scene(sim: Any) -> None:
                         "'outside' or 'both' to say otherwise)" if side else "")
                 problems.append(f"{int(out.sum())} particle(s) lie outside boundary {k} "
                                 f"({bd.name}): id(s) {few(b.id[out])}{hint}")
+    # what runs but is most likely a slip of units or of a centre: warned about once per
+    # scene (before a refusal too: a radius in mm read as m explains an overlap)
+    from .plausibility import warn_plausibility
+
+    warn_plausibility(sim, stacklevel=4)  # (sim.run's caller: _prepare, run, it)
     if problems:
         raise SceneError("scene check before the first step:\n  " + "\n  ".join(problems))
 

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
+from ..parameters import shown
 
 #: per-particle keys of a frame dict (those of :meth:`dpm.io.hdf5.Run.frame`)
 FRAME_KEYS = ("id", "position", "velocity", "orientation", "angular_velocity", "radius",
@@ -53,6 +54,26 @@ def sim_frame(sim: Any) -> dict[str, Any]:
     return out
 
 
+def frame_index(run: Any, frame: Any) -> int:
+    """``frame`` as an index into ``run``'s frames (negative: from the end), or a
+    ParameterError naming the run's frame count (not an IndexError)."""
+    n = len(run.times)
+    try:
+        k = int(frame)
+        whole = k == frame
+    except (TypeError, ValueError, OverflowError):
+        whole = False
+    if not whole or isinstance(frame, bool | np.bool_):
+        raise ParameterError(f"frame={shown(frame)} is not an integer (a frame index: 0 is "
+                             "the first, -1 the last)")
+    if not -n <= k < n:
+        where = getattr(run, "path", "the run")
+        allowed = (f"allowed: 0 .. {n - 1}, or -1 .. -{n} from the end" if n
+                   else "it has none to choose from")
+        raise ParameterError(f"frame={k}: {where} has {n} frame(s); {allowed}")
+    return k % n
+
+
 def as_frame(obj: Any, frame: int = -1) -> dict[str, Any]:
     """One frame dict from a frame dict, a :class:`~dpm.io.hdf5.Run` (frame ``frame``) or a
     :class:`dpm.Simulation` (its current state)."""
@@ -61,7 +82,7 @@ def as_frame(obj: Any, frame: int = -1) -> dict[str, Any]:
             raise ParameterError("a frame dict needs at least 'position' (n, 3)")
         return obj
     if is_run(obj):
-        return obj.frame(frame)
+        return obj.frame(frame_index(obj, frame))
     if is_sim(obj):
         return sim_frame(obj)
     raise ParameterError(f"expected a frame dict, a run (dpm.load) or a Simulation, got "
@@ -82,9 +103,9 @@ def frames_of(source: Any, frames: int | Iterable[int] | slice | None = None
         elif isinstance(frames, slice):
             idx = range(n)[frames]
         elif isinstance(frames, int | np.integer):
-            idx = [int(frames)]
+            idx = [frame_index(source, frames)]
         else:
-            idx = [int(k) for k in frames]
+            idx = [frame_index(source, k) for k in frames]
         for k in idx:
             yield source.frame(k)
         return
@@ -118,7 +139,7 @@ def unit(v: Any, name: str) -> np.ndarray:
     v = np.asarray(v, float).reshape(3)
     n = float(np.linalg.norm(v))
     if not n > 0:
-        raise ParameterError(f"{name}={tuple(v)} must be a non-zero vector")
+        raise ParameterError(f"{name}={shown(v)} must be a non-zero vector")
     return v / n
 
 

@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import os
+import signal
+import sys
 from typing import Any
 
 import numpy as np
 
 from ..errors import ParameterError
+from ..parameters import shown
 
 
 def _options(words: list[str] | None, what: str) -> dict[str, str]:
@@ -56,7 +60,43 @@ def _summary(run: Any) -> None:
     print(f"thermo rows: {len(run.thermo.get('time', []))}")
 
 
+#: the exit status after the reader of standard output went away (``dpm analyse ... |
+#: head``): a shell's for a process ended by SIGPIPE, 128 + 13
+BROKEN_PIPE_STATUS = 128 + int(getattr(signal, "SIGPIPE", 13))
+
+
 def analyse(args: argparse.Namespace) -> int:
+    """``dpm analyse``: the results asked for, as text on standard output. When the reader
+    of the output goes away first (``dpm analyse run.h5 --thermo | head``) it stops
+    quietly, as Unix tools do, with status :data:`BROKEN_PIPE_STATUS`."""
+    try:
+        status = _analyse(args)
+        sys.stdout.flush()  # (inside: a broken pipe shows here, not at exit)
+        return status
+    except BrokenPipeError:
+        # what is still buffered goes nowhere: Python's own flush at exit would complain
+        # ("Exception ignored ... BrokenPipeError") and exit with status 120
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+            os.close(devnull)
+        except (OSError, ValueError):  # (a stdout without a file descriptor)
+            pass
+        return BROKEN_PIPE_STATUS
+
+
+def flow_normal(axis: str, gravity: Any = (0.0, 0.0, -9.81)) -> np.ndarray:
+    """The default normal of ``--flow x=|y=|z=``: along gravity where the plane lies across
+    it (z= under gravity along -z: (0, 0, -1), so that falling mass counts positive), else
+    the axis' own direction (+x, +y)."""
+    k = "xyz".index(axis)
+    g = np.asarray(gravity, float).reshape(3)
+    n = np.zeros(3)
+    n[k] = -1.0 if g[k] < 0.0 else 1.0
+    return n
+
+
+def _analyse(args: argparse.Namespace) -> int:
     from ..io.hdf5 import load
     from . import contacts, drum, mixing, residence
     from .thermo import format_table
@@ -89,10 +129,13 @@ def analyse(args: argparse.Namespace) -> int:
             point = np.zeros(3)
             idx = "xyz".index(axes[0])
             point[idx] = _num(o, axes[0], 0.0)
-            normal = _vec(o["normal"], "normal") if "normal" in o else np.eye(3)[idx]
+            if "normal" in o:
+                normal = _vec(o["normal"], "normal")
+            else:  # (the help's default: z=0.0 [normal=0,0,-1], falling mass positive)
+                normal = flow_normal(axes[0], run.attrs.get("gravity", (0.0, 0.0, -9.81)))
             s = residence.plane_flow_rate(run, point, normal, bin_width=bw)
             print(f"mass flow rate through {axes[0]} = {point[idx]:g} along normal "
-                  f"{tuple(normal)} [kg/s]")
+                  f"{shown(normal, digits=6)} [kg/s]")
         print(f"{'t [s]':>12} {'rate [kg/s]':>14}")
         for t, v in zip(s.time, s.value, strict=True):
             print(f"{t:12.6g} {v:14.6g}")

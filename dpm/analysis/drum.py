@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
+from ..parameters import shown
 from ._common import as_frame, radius_of, unit
 from .fields import ball_points
 
@@ -64,8 +65,8 @@ def drum_surface(source: Any, axis_point: Any, axis: Any, radius: float,
     if method not in ("highest", "fraction"):
         raise ParameterError(f"method={method!r}; allowed: 'highest', 'fraction'")
     if not radius > 0 or not 0 < span <= 1 or bins < 2:
-        raise ParameterError(f"radius={radius!r} must be > 0, span={span!r} in (0, 1], "
-                             f"bins={bins!r} >= 2")
+        raise ParameterError(f"radius={shown(radius)} must be > 0, span={shown(span)} in (0, 1], "
+                             f"bins={shown(bins)} >= 2")
     f = as_frame(source, frame)
     a = np.asarray(axis_point, float).reshape(3)
     ax = unit(axis, "axis")

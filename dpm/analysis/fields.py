@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
+from ..parameters import shown
 from ._common import axis_index, frames_of, mass_of, radius_of
 
 
@@ -55,7 +56,7 @@ class Field:
             e = self.edges[a]
             k = int(np.searchsorted(e, at, side="right")) - 1
             if not 0 <= k < len(e) - 1:
-                raise ParameterError(f"at={at!r} is outside the grid [{e[0]}, {e[-1]}]")
+                raise ParameterError(f"at={shown(at)} is outside the grid [{e[0]}, {e[-1]}]")
             out = np.take(arr, k, axis=a)
         rest = [i for i in range(3) if i != a]
         e1, e2 = self.edges[rest[0]], self.edges[rest[1]]
@@ -66,8 +67,8 @@ def _grid(lower: Any, upper: Any, cell: Any) -> tuple[np.ndarray, ...]:
     lo, hi = np.asarray(lower, float).reshape(3), np.asarray(upper, float).reshape(3)
     c = np.broadcast_to(np.asarray(cell, float), (3,))
     if not np.all(c > 0) or not np.all(hi > lo):
-        raise ParameterError(f"cell={cell!r} must be > 0 and upper > lower "
-                             f"(lower={tuple(lo)}, upper={tuple(hi)})")
+        raise ParameterError(f"cell={shown(cell)} must be > 0 and upper > lower "
+                             f"(lower={shown(lo)}, upper={shown(hi)})")
     n = np.maximum(np.round((hi - lo) / c).astype(int), 1)
     return tuple(lo[i] + c[i] * np.arange(n[i] + 1) for i in range(3))
 
@@ -185,7 +186,7 @@ def coarse_grain(source: Any, width: float, cell: Any, lower: Any, upper: Any,
     from scipy.spatial import cKDTree
 
     if not width > 0:
-        raise ParameterError(f"width={width!r} must be > 0 [m]")
+        raise ParameterError(f"width={shown(width)} must be > 0 [m]")
     edges = _grid(lower, upper, cell)
     shape = tuple(len(e) - 1 for e in edges)
     cen = np.stack(np.meshgrid(*(0.5 * (e[1:] + e[:-1]) for e in edges), indexing="ij"),

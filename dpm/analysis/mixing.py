@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
+from ..parameters import shown
 from ._common import Series, frames_of, is_run
 
 
@@ -61,7 +62,7 @@ def lacey(frame: dict[str, Any], labels: Any | Callable, cell: Any,
     hi = x.max(axis=0) + 1e-12 if upper is None else np.asarray(upper, float)
     c = np.broadcast_to(np.asarray(cell, float), (3,))
     if not np.all(c > 0):
-        raise ParameterError(f"cell={cell!r} must be > 0")
+        raise ParameterError(f"cell={shown(cell)} must be > 0")
     n = np.maximum(np.ceil((hi - lo) / c).astype(int), 1)
     k = np.floor((x - lo) / c).astype(int)
     inside = np.all((k >= 0) & (k < n), axis=1)

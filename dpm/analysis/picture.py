@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DpmError, ParameterError
-from ._common import AXES, as_frame, is_run, radius_of
+from ._common import AXES, as_frame, frame_index, is_run, radius_of
 
 COLORS = {"speed": "speed [m/s]", "x": "x [m]", "y": "y [m]", "z": "z [m]",
           "material": "material", "id": "id", "radius": "radius [m]"}
@@ -50,12 +50,9 @@ def boundary_triangles(source: Any, frame: int = -1) -> dict[str, np.ndarray] | 
     if is_run(source):
         from ..io.hdf5 import _open
 
-        n = len(source.times)
-        if n == 0:
+        if len(source.times) == 0:
             return None
-        k = int(frame) % n if -n <= int(frame) < n else None
-        if k is None:
-            raise ParameterError(f"frame={frame}: {source.path} has {n} frame(s)")
+        k = frame_index(source, frame)
         with _open(source.path) as f:
             if "surfaces" not in f or not len(f["surfaces/faces"]):
                 return None

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
+from ..parameters import shown
 from ._common import Series, frames_of, is_run, is_sim, mass_of, unit
 
 
@@ -113,7 +114,7 @@ def residence_times(source: Any, outlet: int | None = None, mass_weighted: bool 
 def _bin(times: np.ndarray, mass: np.ndarray, bin_width: float, t0: float, t1: float
          ) -> Series:
     if not bin_width > 0:
-        raise ParameterError(f"bin_width={bin_width!r} must be > 0 [s]")
+        raise ParameterError(f"bin_width={shown(bin_width)} must be > 0 [s]")
     n = max(int(np.ceil((t1 - t0) / bin_width - 1e-9)), 1)
     edges = t0 + bin_width * np.arange(n + 1)
     total, _ = np.histogram(times, bins=edges, weights=mass)
@@ -190,7 +191,7 @@ def beverloo(bulk_density: float, orifice: float, particle_diameter: float,
     for name, v in (("bulk_density", bulk_density), ("orifice", orifice),
                     ("particle_diameter", particle_diameter), ("g", g)):
         if not v > 0:
-            raise ParameterError(f"beverloo(): {name}={v!r} must be > 0")
+            raise ParameterError(f"beverloo(): {name}={shown(v)} must be > 0")
     return float(C * bulk_density * np.sqrt(g) * max(orifice - k * particle_diameter, 0.0)
                  ** 2.5)
 
@@ -214,7 +215,7 @@ def fit_beverloo(orifices: Any, rates: Any, particle_diameter: float, bulk_densi
     for name, v in (("particle_diameter", particle_diameter), ("bulk_density", bulk_density),
                     ("g", g)):
         if not v > 0:
-            raise ParameterError(f"fit_beverloo(): {name}={v!r} must be > 0")
+            raise ParameterError(f"fit_beverloo(): {name}={shown(v)} must be > 0")
     s, intercept = np.polyfit(D, W ** 0.4, 1)
     if not s > 0:
         raise ParameterError(f"fit_beverloo(): the rates {W.tolist()} do not grow with the "

@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..hookspecs import hookimpl
 from ..io.hdf5 import THERMO_COLUMNS
+from ..parameters import shown
 
 #: column -> (header, format)
 _FORMAT = {"time": ("time[s]", "{:12.6g}"), "step": ("step", "{:10.0f}"),
@@ -62,7 +63,7 @@ class Thermo:
     def __init__(self, sim: Any, every: float | None = None, live: bool = False,
                  file: bool = True, stream: Any = None) -> None:
         if every is not None and not (isinstance(every, int | float) and every > 0):
-            raise ParameterError(f"Thermo(every={every!r}): a time > 0 [s] or None (one row "
+            raise ParameterError(f"Thermo(every={shown(every)}): a time > 0 [s] or None (one row "
                                  f"per output frame)")
         self.sim = sim
         self.every = None if every is None else float(every)

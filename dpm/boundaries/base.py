@@ -10,7 +10,7 @@ import numpy as np
 
 from ..kernels.boundary_geometry import PAR_WIDTH, PLANE
 from ..material import Material
-from ..parameters import Parameter, validate
+from ..parameters import Parameter, declared_repr, validate
 
 
 @dataclass
@@ -114,6 +114,19 @@ class Boundary:
         #: work [J] the boundary has done on the particles since the first step (its
         #: drive's energy input; 0 for a boundary at rest)
         self.work = 0.0
+
+    def __repr__(self) -> str:
+        """``Tube(material='steel', length=1, radius=0.05, motion=Rotation(...))``: the
+        material's name, the declared parameters given (required ones and those that
+        differ from their default) and the motion."""
+        material = getattr(self, "material", None)
+        lead = [f"material={material.name!r}"] if isinstance(material, Material) else []
+        motion = getattr(self, "motion", None)
+        trail = [f"motion={motion!r}"] if motion is not None else []
+        if not getattr(self, "enabled", True):
+            trail.append("enabled=False")
+        return declared_repr(type(self).__name__, self.parameters,
+                             getattr(self, "params", {}), lead, trail)
 
     def record_load(self, time: float, force: np.ndarray, torque: np.ndarray,
                     velocity: np.ndarray, angular_velocity: np.ndarray) -> None:

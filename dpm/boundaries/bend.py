@@ -8,7 +8,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..kernels.boundary_geometry import TORUS
-from ..parameters import Parameter
+from ..parameters import Parameter, shown
 from .base import Boundary, Primitives
 from .frames import unit
 
@@ -48,7 +48,7 @@ class Bend(Boundary):
         e1 = np.asarray(p["start_direction"], float)
         e1 = e1 - (e1 @ self.axis) * self.axis
         if np.linalg.norm(e1) < 1e-12:
-            raise ParameterError(f"{call}: start_direction={tuple(p['start_direction'])} "
+            raise ParameterError(f"{call}: start_direction={shown(p['start_direction'])} "
                                  "must not be parallel to axis")
         self.e1 = e1 / np.linalg.norm(e1)
         self.e2 = np.cross(self.axis, self.e1)

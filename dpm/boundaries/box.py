@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
-from ..parameters import Parameter
+from ..parameters import Parameter, shown
 from .base import Boundary
 
 FACES = ("-x", "+x", "-y", "+y", "-z", "+z")
@@ -31,15 +31,15 @@ class Box(Boundary):
         self.lower = np.asarray(self.params["lower"], float)
         self.upper = np.asarray(self.params["upper"], float)
         if np.any(self.upper <= self.lower):
-            raise ParameterError(f"{call}: upper={tuple(self.upper)} must exceed "
-                                 f"lower={tuple(self.lower)} in every coordinate")
+            raise ParameterError(f"{call}: upper={shown(self.upper)} must exceed "
+                                 f"lower={shown(self.lower)} in every coordinate")
         open_faces = self.params["open"]
         if isinstance(open_faces, str):
             open_faces = (open_faces,)
         bad = [f for f in open_faces if f not in FACES]
         if bad:
-            raise ParameterError(f"{call}: open={tuple(open_faces)} has unknown faces {bad}; "
-                                 f"allowed: {', '.join(FACES)}")
+            raise ParameterError(f"{call}: open={shown(tuple(open_faces))} has unknown faces "
+                                 f"{shown(bad)}; allowed: {', '.join(FACES)}")
         self.faces = tuple(f for f in FACES if f not in open_faces)
 
     def planes(self):

@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import ParameterError
+from ..parameters import shown
 
 
 def unit(call: str, name: str, v: Sequence[float]) -> np.ndarray:
@@ -14,7 +15,7 @@ def unit(call: str, name: str, v: Sequence[float]) -> np.ndarray:
     a = np.asarray(v, float)
     n = float(np.linalg.norm(a))
     if n == 0.0 or not np.isfinite(n):
-        raise ParameterError(f"{call}: {name}={tuple(a)} must be a non-zero finite vector")
+        raise ParameterError(f"{call}: {name}={shown(v)} must be a non-zero finite vector")
     return a / n
 
 
@@ -25,10 +26,12 @@ def in_plane_axes(call: str, normal: np.ndarray, u: Sequence[float] | None,
     if u is None:
         helper = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0, 1.0, 0])
         u = np.cross(normal, np.cross(helper, normal))
+    given = u
     u = np.asarray(u, float)
     u = u - (u @ normal) * normal
     if np.linalg.norm(u) < 1e-12:
-        raise ParameterError(f"{call}: {uname}={tuple(u)} must not be parallel to the normal")
+        raise ParameterError(f"{call}: {uname}={shown(given)} must not be parallel to the "
+                             "normal")
     u = u / np.linalg.norm(u)
     return u, np.cross(normal, u)
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..kernels.boundary_geometry import TRIANGLE
-from ..parameters import Parameter, numeric_array
+from ..parameters import Parameter, numeric_array, shown
 from .base import Boundary, Primitives
 
 #: dihedral angle [rad] below which an edge counts as flat (inactive)
@@ -32,24 +32,24 @@ def rotation_matrix(call: str, spec: Any) -> np.ndarray:
     try:
         a = np.asarray(spec, float)
     except (TypeError, ValueError):
-        raise ParameterError(f"{call}: rotate={spec!r}; {allowed}") from None
+        raise ParameterError(f"{call}: rotate={shown(spec)}; {allowed}") from None
     if not np.all(np.isfinite(a)):
-        raise ParameterError(f"{call}: rotate={spec!r} is not finite; {allowed}")
+        raise ParameterError(f"{call}: rotate={shown(spec)} is not finite; {allowed}")
     if a.shape == (3, 3):
         if not (np.allclose(a @ a.T, np.eye(3), atol=1e-9) and np.linalg.det(a) > 0):
-            raise ParameterError(f"{call}: rotate={spec!r} is not a rotation matrix "
+            raise ParameterError(f"{call}: rotate={shown(spec)} is not a rotation matrix "
                                  "(orthonormal, determinant +1)")
         return a
     if a.shape == (4,):
         a = a[None]
     if a.ndim != 2 or a.shape[1] != 4:
-        raise ParameterError(f"{call}: rotate={spec!r}; {allowed}")
+        raise ParameterError(f"{call}: rotate={shown(spec)}; {allowed}")
     r = np.eye(3)
     for ax, ay, az, deg in a:
         n = np.array([ax, ay, az])
         norm = float(np.linalg.norm(n))
         if norm == 0.0:
-            raise ParameterError(f"{call}: rotate={spec!r} has a zero axis; {allowed}")
+            raise ParameterError(f"{call}: rotate={shown(spec)} has a zero axis; {allowed}")
         n /= norm
         t = np.radians(deg)
         k = np.array([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..kernels.boundary_geometry import AXI
-from ..parameters import Parameter
+from ..parameters import Parameter, shown
 from .base import Boundary, Primitives
 from .frames import in_plane_axes, unit
 
@@ -67,7 +67,7 @@ class OrificePlate(Boundary):
             else np.array([np.nan])
         if self.shape == "round":
             if hole.shape != (1,) or not (np.isfinite(hole[0]) and hole[0] > 0):
-                raise ParameterError(f"{call}: hole={p['hole']!r} must be the orifice "
+                raise ParameterError(f"{call}: hole={shown(p['hole'])} must be the orifice "
                                      "diameter, a positive length in m")
             if p["radius"] is None:
                 raise ParameterError(f"{call}: a round plate needs radius= (its outline, "
@@ -78,26 +78,26 @@ class OrificePlate(Boundary):
             self.hole = float(hole[0])
             self.radius = float(p["radius"])
             if not self.radius > 0.5 * self.hole:
-                raise ParameterError(f"{call}: radius={self.radius!r} must exceed hole / 2 = "
+                raise ParameterError(f"{call}: radius={shown(self.radius)} must exceed hole / 2 = "
                                      f"{self.hole / 2:g} m")
             self.hole_area = math.pi * self.hole**2 / 4.0
         else:
             if hole.shape == (1,):
                 hole = np.repeat(hole, 2)
             if hole.shape != (2,) or not np.all(np.isfinite(hole) & (hole > 0)):
-                raise ParameterError(f"{call}: hole={p['hole']!r} must be (width, length) "
+                raise ParameterError(f"{call}: hole={shown(p['hole'])} must be (width, length) "
                                      "of the opening, or its side, positive lengths in m")
             he = None if p["half_extents"] is None else \
                 np.asarray(p["half_extents"], float).reshape(-1)
             if he is None or he.shape != (2,) or not np.all(he > 0):
-                raise ParameterError(f"{call}: half_extents={p['half_extents']!r} must be "
+                raise ParameterError(f"{call}: half_extents={shown(p['half_extents'])} must be "
                                      "two positive lengths (a, b) of the outline")
             if p["radius"] is not None:
                 raise ParameterError(f"{call}: radius is for shape='round'; a rectangular "
                                      "plate takes half_extents=")
             if not np.all(he > 0.5 * hole):
-                raise ParameterError(f"{call}: half_extents={tuple(he)} must exceed half the "
-                                     f"opening {tuple(hole / 2)} on both axes")
+                raise ParameterError(f"{call}: half_extents={shown(he)} must exceed half the "
+                                     f"opening {shown(hole / 2)} on both axes")
             self.hole = (float(hole[0]), float(hole[1]))
             self.a, self.b = float(he[0]), float(he[1])
             self.hole_area = self.hole[0] * self.hole[1]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
-from ..parameters import Parameter
+from ..parameters import Parameter, shown
 from .base import Boundary
 
 
@@ -26,7 +26,8 @@ class Plane(Boundary):
         n = np.asarray(self.params["normal"], float)
         norm = np.linalg.norm(n)
         if norm == 0.0:
-            raise ParameterError(f"{call or 'Plane()'}: normal={tuple(n)} must not be zero")
+            raise ParameterError(f"{call or 'Plane()'}: normal={shown(self.params['normal'])} "
+                                 "must not be zero")
         self.point = np.asarray(self.params["point"], float)
         self.normal = n / norm
 

@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 
 from ..kernels.boundary_geometry import SLAB
-from ..parameters import Parameter
+from ..parameters import Parameter, shown
 from .base import Boundary, Primitives
 from .frames import box_of_points, in_plane_axes, unit
 
@@ -44,7 +44,7 @@ class Wall(Boundary):
         if he.shape != (2,) or not np.all(he > 0):
             from ..errors import ParameterError
 
-            raise ParameterError(f"{call}: half_extents={p['half_extents']!r} must be two "
+            raise ParameterError(f"{call}: half_extents={shown(p['half_extents'])} must be two "
                                  "positive lengths (a, b)")
         self.a, self.b = float(he[0]), float(he[1])
         self.h = 0.5 * float(p["thickness"])
