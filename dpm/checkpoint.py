@@ -441,7 +441,7 @@ def apply_scene_settings(sim: Simulation, scene: Simulation, source: str) -> lis
         if a != b:
             setattr(sim, name, b)  # (each setter checks, as between runs)
             said.append(f"{name}: {a!r} -> {b!r} (from {source})")
-    threads = getattr(scene.backend, "threads", None)
+    threads = scene.backend.threads
     if threads != sim.backend.threads:
         said.append(f"threads: {sim.backend.threads!r} -> {threads!r} (from {source})")
         sim.backend.threads = threads

@@ -909,9 +909,7 @@ class Writer:
         if extra or "contacts" in self.file:
             from .contacts import particle_values
 
-            backend = getattr(sim, "backend", None)  # (a stand-in state has none)
-            if backend is not None:  # (the contact lists of a device backend)
-                backend.to_host()
+            sim.backend.to_host()  # (the contact lists of a device backend)
         for name in extra:
             ds = g[name]
             ds.resize(self.rows + n, axis=0)

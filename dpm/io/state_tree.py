@@ -40,6 +40,7 @@ from __future__ import annotations
 import base64
 import copyreg
 import enum
+import functools
 import importlib
 import math
 import os
@@ -74,6 +75,7 @@ def _name(obj: Any) -> str:
     return f"{obj.__module__}:{obj.__qualname__}"
 
 
+@functools.lru_cache(maxsize=1)
 def _library_dirs() -> tuple[str, ...]:
     """Where the standard library and installed packages live (their code is never named
     by a checkpoint)."""
