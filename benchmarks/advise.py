@@ -39,7 +39,9 @@ kernels, left out) per simulated second, summed over the replicas; the default's
 its step with the replicas it needs for the same tolerance. The calibration and the check
 share the scenes' kind, not their size: the check shows how the calibration carries over
 to a larger scene of the same kind, not to a new kind. ``--quick`` calibrates and checks
-on the small size (a smoke test; its sensitivities stay out of the shipped tables).
+on a smaller, shorter size still (``SMOKE_REPLICAS`` replicas, at most one run of each
+advice: a smoke test of the whole path in a minute or two; its sensitivities stay out of
+the shipped tables).
 Writes benchmarks/results/advise.json and advise.png (advise_quick.*).
 
     python benchmarks/advise.py            # ~1 h on the 2-core machine (1,009 s with the drum
@@ -73,7 +75,6 @@ from dpm.advice.condense import condense
 from dpm.advice.scene import scene_facts
 
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 box_settle = harness.example("box_settle")
 hopper_discharge = harness.example("hopper_discharge")
 rotating_drum = harness.example("rotating_drum")
@@ -89,12 +90,18 @@ TOLERANCES = (0.01, 0.05)
 CAL_REPLICAS = {"box_settle": (1, 1), "rotating_drum": (24, 24), "hopper": (4, 4)}
 #: reference replicas of the check (full size)
 CHECK_REF_REPLICAS = {"box_settle": 1, "rotating_drum": 12, "hopper": 4}
+#: --quick: calibration replicas of every scene (R = R_ref = 1: the scatter from a twin)
+SMOKE_REPLICAS = (1, 1)
 
 
-def scenes(quick: bool) -> dict[str, dict]:
-    """name -> builder, quantity, run time [s], window: the small (calibration, --quick) or
-    the full (check) size."""
-    if quick:
+def scenes(quick: bool | str) -> dict[str, dict]:
+    """name -> builder, quantity, run time [s], window: the small (calibration, True) or
+    the full (check, False) size, or ``"smoke"``: the --quick run's, smaller and shorter."""
+    if quick == "smoke":
+        box = dict(lattice=(6, 6, 6), until=0.12)
+        drum = dict(fill=0.15, until=0.35, window=(0.2, 0.35))
+        silo = dict(orifice=0.03, radius=0.04, height=0.035, until=0.4, window=(0.33, 0.4))
+    elif quick:
         box = dict(lattice=(10, 10, 10), until=0.2)
         drum = dict(fill=0.25, until=1.0, window=(0.5, 1.0))
         silo = dict(orifice=0.03, radius=0.04, height=0.07, until=0.65, window=(0.35, 0.65))
@@ -168,7 +175,7 @@ def run_at(spec: dict, n: float | None = None, twin: bool = False, replica: int 
     return r
 
 
-def _task(quick: bool, name: str, kw: dict) -> dict:
+def _task(quick: bool | str, name: str, kw: dict) -> dict:
     """One run in a worker process (the scene rebuilt there from its name)."""
     import numba
 
@@ -213,7 +220,7 @@ def pooled_scatter(groups: list[list[float]], scale: float) -> tuple[float, int]
     return (math.sqrt(ss / dof) / abs(scale) if dof else math.nan), dof
 
 
-def calibration_phase(specs: dict, workers: int) -> dict:
+def calibration_phase(specs: dict, workers: int, size: bool | str = True) -> dict:
     """Per scene: R replicas at each calibration step and R_REF at the reference; the
     systematic error of each step (replica means), its standard uncertainty, and the
     scatter of one run pooled over every step's replicas."""
@@ -226,15 +233,15 @@ def calibration_phase(specs: dict, workers: int) -> dict:
         keys = []
         for k in range(R_ref):
             keys.append(("reference", k))
-            jobs.append((True, name, {"n": N_REF, "replica": k, "weight": N_REF}))
+            jobs.append((size, name, {"n": N_REF, "replica": k, "weight": N_REF}))
         for f in CAL_FACTORS:
             for k in range(R):
                 keys.append((f"x{f:g}", k))
-                jobs.append((True, name, {"n": f * n_cal, "replica": k, "weight": f * n_cal}))
+                jobs.append((size, name, {"n": f * n_cal, "replica": k, "weight": f * n_cal}))
         if R == 1:  # the scatter from a twin of the example's set-up (one degree of freedom)
             for tw in (False, True):
                 keys.append(("twin" if tw else "default", 0))
-                jobs.append((True, name, {"twin": tw, "weight": 20.0}))
+                jobs.append((size, name, {"twin": tw, "weight": 20.0}))
         plan[name] = {"n_cal": n_cal, "R": R, "R_ref": R_ref, "keys": keys,
                       "first": len(jobs) - len(keys)}
     t0 = time.perf_counter()
@@ -288,7 +295,7 @@ def calibration_phase(specs: dict, workers: int) -> dict:
     return out
 
 
-def check_phase(specs: dict, tables: str | None, quick: bool, workers: int,
+def check_phase(specs: dict, tables: str | None, quick: bool | str, workers: int,
                 max_runs: int, cell_cpu: float, cal: dict | None = None) -> dict:
     """For each scene: the advice at each tolerance (with its replicas N), N runs of it
     (at most ``max_runs`` and what ``cell_cpu`` CPU seconds allow), R_REF runs of the
@@ -492,8 +499,8 @@ def table(result: dict) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = harness.parser(__doc__, "calibrate and check on the small scenes (a smoke test)")
     ap.add_argument("--calibration", default=None, metavar="JSON",
-                    help="take the calibration from this earlier result (advise.json or "
-                    "advise_quick.json: the same small scenes) instead of running it")
+                    help="take the calibration from this earlier result (advise.json: the "
+                    "small scenes; advise_quick.json: the --quick ones) instead of running it")
     ap.add_argument("--calibration-only", action="store_true",
                     help="stop after the calibration (and, without --quick, the tables)")
     ap.add_argument("--scenes", nargs="+", default=None, metavar="NAME",
@@ -501,9 +508,9 @@ def main(argv: list[str] | None = None) -> int:
                     "advise[_quick]_partial.json, never the shipped tables")
     ap.add_argument("--workers", type=int, default=2,
                     help="processes running the replicas side by side (default 2)")
-    ap.add_argument("--max-runs", type=int, default=12,
-                    help="at most this many runs of an advice in the check (default 12): "
-                    "an advice needing more is reported, not verified")
+    ap.add_argument("--max-runs", type=int, default=None,
+                    help="at most this many runs of an advice in the check (default 12, "
+                    "--quick 1): an advice needing more is reported, not verified")
     ap.add_argument("--cell-cpu", type=float, default=600.0,
                     help="CPU seconds (predicted) the check spends on one advice's runs "
                     "(default 600)")
@@ -518,6 +525,9 @@ def main(argv: list[str] | None = None) -> int:
                     "this full result (advise.json) in place of its own, then condense the "
                     "shipped tables from it and draw its plot again")
     a = ap.parse_args(argv)
+    if a.quick:  # (the smoke size: one replica a step, a twin for the scatter)
+        for name in CAL_REPLICAS:
+            CAL_REPLICAS[name] = SMOKE_REPLICAS
     for item in a.cal_replicas:
         name, _, val = item.partition("=")
         r, _, r_ref = val.partition(",")
@@ -525,6 +535,8 @@ def main(argv: list[str] | None = None) -> int:
     for item in a.check_ref:
         name, _, val = item.partition("=")
         CHECK_REF_REPLICAS[name] = int(val)
+    a.max_runs = a.max_runs or (1 if a.quick else 12)
+    size = "smoke" if a.quick else True  # (the calibration's; the check's: "smoke" or full)
     if a.merge_into and not a.scenes:
         ap.error("--merge-into needs --scenes (a full run writes advise.json itself)")
     import numba
@@ -540,34 +552,36 @@ def main(argv: list[str] | None = None) -> int:
         cal = json.loads(Path(a.calibration).read_text())["calibration"]
         print(f"calibration from {a.calibration}", flush=True)
     else:
-        cal = calibration_phase(pick(scenes(True)), a.workers)
+        cal = calibration_phase(pick(scenes(size)), a.workers, size)
     result = {"quick": a.quick, "run": harness.machine() | {"argv": sys.argv[1:]},
               "n_ref": N_REF, "max_rayleigh": MAX_RAYLEIGH, "z": 2.0, "workers": a.workers,
               "calibration": cal}
-    RESULTS.mkdir(exist_ok=True)
-    path = RESULTS / f"{stem}.json"
+    harness.RESULTS.mkdir(parents=True, exist_ok=True)
+    path = harness.RESULTS / f"{stem}.json"
     # the calibration into the advisor's tables, then the advice: the full run writes the
-    # shipped tables, the quick or partial one a temporary file
+    # shipped tables, the quick or partial one (or one with --results elsewhere) a
+    # temporary file, from the shipped results and this run's calibration
     path.write_text(json.dumps(result, indent=1))  # (--calibration can take it from here)
-    if a.quick or a.scenes:
+    if a.quick or a.scenes or harness.RESULTS != harness.SHIPPED:
         tmp = Path(tempfile.mkdtemp())
-        for f in RESULTS.glob("*.json"):
+        for f in harness.SHIPPED.glob("*.json"):
             (tmp / f.name).write_text(f.read_text())
         (tmp / "advise.json").write_text(json.dumps(result, indent=1))
         tables = str(tmp / "work_precision.json")
         condense(tmp, Path(tables))
     else:
-        condense(RESULTS)
+        condense(harness.SHIPPED)
         tables = None
     if a.calibration_only:
         print(f"\nwrote {path} ({time.perf_counter() - t0:.0f} s)")
         return 0
-    result["scenes"] = check_phase(pick(scenes(a.quick)), tables, a.quick, a.workers,
+    check = "smoke" if a.quick else False
+    result["scenes"] = check_phase(pick(scenes(check)), tables, check, a.workers,
                                    a.max_runs, a.cell_cpu,
                                    cal if a.quick and not a.calibration else None)
     result["wall_s"] = time.perf_counter() - t0
     path.write_text(json.dumps(result, indent=1, default=str))
-    harness.png(plot, result, path=RESULTS / f"{stem}.png")
+    harness.png(plot, result, path=path.with_suffix(".png"))
     print()
     print(table(result))
     print(f"\nwrote {path} and .png ({result['wall_s']:.0f} s)")
@@ -591,8 +605,8 @@ def merge(partial: dict, into: Path, argv: list[str] | None) -> None:
         "wall_s": partial.get("wall_s"), "cal_replicas": dict(CAL_REPLICAS),
         "check_ref_replicas": dict(CHECK_REF_REPLICAS)})
     into.write_text(json.dumps(full, indent=1, default=str))
-    if into.resolve().parent == RESULTS.resolve() and not full.get("quick"):
-        condense(RESULTS)
+    if into.resolve().parent == harness.SHIPPED and not full.get("quick"):
+        condense(harness.SHIPPED)
     plot(full, into.with_suffix(".png"))
     print()
     print(table(full))

@@ -33,7 +33,6 @@ from __future__ import annotations
 import json
 import math
 import time
-from pathlib import Path
 
 import harness
 import numba
@@ -41,9 +40,6 @@ import numpy as np
 import shared_scenes as im  # the references of impact_models.py: same scene, same solvers
 
 import dpm
-
-HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 
 MODELS = ["hertz_mindlin", "hooke", "walton_braun", "hertz_brilliantov"]
 RESTITUTIONS = [0.1, 0.3, 0.5, 0.7, 0.9, 1.0]
@@ -213,7 +209,7 @@ def main(argv: list[str] | None = None) -> int:
               "equivalent": {"linear_spring_dashpot": "hooke", "maw_linear_spring": "hooke",
                              "linear_cohesion": "hertz_mindlin"},
               "table": table}
-    path = RESULTS / f"{harness.stem('advise_contact_errors', a.quick)}.json"
+    path = harness.RESULTS / f"{harness.stem('advise_contact_errors', a.quick)}.json"
     if a.integrator and path.exists():  # add to what an earlier run measured
         old = json.loads(path.read_text())
         old["table"].update(table)

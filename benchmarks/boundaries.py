@@ -49,7 +49,6 @@ from dpm.kernels.boundary_geometry import AXI, PLANE, SIEVE, SLAB, TORUS, TRIANG
 
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
-OUT = Path(__file__).parent / "results"
 SCENE = Path(__file__).parent / "scenes" / "mesh_floor"
 R = 2e-3
 #: the Verlet skin of both codes (``neighbor 0.0004 bin`` in mesh_floor.liggghts; dpm's
@@ -332,7 +331,8 @@ def main() -> None:
     args = ap.parse_args()
     if args.plot_only:
         name = "boundaries_quick" if args.quick else "boundaries"
-        plot(json.loads((OUT / f"{name}.json").read_text()), OUT / f"{name}.png")
+        path = harness.RESULTS / f"{name}.json"
+        harness.png(plot, json.loads(path.read_text()), path=path.with_suffix(".png"))
         return
     numba.set_num_threads(1)  # the search kernels are parallel loops; time one thread
     sizes = [1, 3, 10, 32, 100, 316] if not args.quick else [1, 10, 100]
@@ -347,6 +347,7 @@ def main() -> None:
     res["mesh_fixed_floor"] = mesh_scaling([10, 32, 100, 316] if not args.quick else [10],
                                            liggghts=not args.no_liggghts, side=FIXED_FLOOR,
                                            two_threads=True)
+    res["peer"] = harness.peer(args.no_liggghts)
     res["liggghts"] = (None if args.no_liggghts or shutil.which("liggghts") is None else
                        subprocess.run(["liggghts", "-h"], capture_output=True, text=True)
                        .stdout.split("\n\n")[0].strip()[:120])

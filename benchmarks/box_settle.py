@@ -28,7 +28,6 @@ os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step
 
 HERE = Path(__file__).resolve().parent
 SCENE = HERE / "scenes" / "box_settle"
-RESULTS = HERE / "results"
 
 
 def run_dpm(lat, steps, threads=1, warmup=20):
@@ -116,7 +115,8 @@ def main():
     lg = None if a.no_liggghts else run_liggghts(lat, steps)
     lps = lg["particle_steps_per_s"] if lg else None
     result = {"scene": "box_settle", "lattice": lat, "dpm": d, "dpm_2_threads": d2,
-              "liggghts": lg, "ratio": harness.ratio(d["particle_steps_per_s"], lps),
+              "peer": harness.peer(a.no_liggghts), "liggghts": lg,
+              "ratio": harness.ratio(d["particle_steps_per_s"], lps),
               "ratio_2_threads": harness.ratio(d2["particle_steps_per_s"], lps) if d2 else None,
               "mean_z_rel_diff": (d["mean_z_m"] / lg["mean_z_m"] - 1)
               if lg and lg["mean_z_m"] else None}

@@ -1,10 +1,11 @@
 """Clustered bodies settling in a box: dpm against LIGGGHTS' ``fix multisphere``, one run.
 
-N four-sphere clusters (default 2,000; ``--quick`` 300): four equal spheres (r = 1 mm)
-at the corners of a regular tetrahedron 0.866 mm from its centre (overlapping: edge
-1.414 mm), 2500 kg/m3, Hertz-Mindlin (E = 5 MPa, nu = 0.45, e = 0.3, mu = 0.5, as
-box_settle), dt = 1e-5 s, fall from rest under gravity into a square box of planar walls
-open at the top. dpm: ``dpm.shapes.Multisphere(centres=, radii=)``; LIGGGHTS 3.8:
+N four-sphere clusters (default 2,000; ``--quick`` 300, from one LIGGGHTS seed, a
+settled window of 5,000 steps and 1,000-step turns of the thread counts): four
+equal spheres (r = 1 mm) at the corners of a regular tetrahedron 0.866 mm from its centre
+(overlapping: edge 1.414 mm), 2500 kg/m3, Hertz-Mindlin (E = 5 MPa, nu = 0.45, e = 0.3,
+mu = 0.5, as box_settle), dt = 1e-5 s, fall from rest under gravity into a square box of
+planar walls open at the top. dpm: ``dpm.shapes.Multisphere(centres=, radii=)``; LIGGGHTS 3.8:
 ``particletemplate/multisphere`` + ``particledistribution/discrete`` + ``fix insert/pack``
 (``insert_every once``, random orientation, overlap check) + ``fix multisphere``.
 
@@ -57,7 +58,6 @@ from shared_scenes import LIGGGHTS_BOX_MATERIALS, LIGGGHTS_HEADER
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 
 DT = 1e-5
 R, A = 1e-3, 0.5e-3  # sphere radius, template corner coordinate (centre distance A sqrt 3)
@@ -69,12 +69,14 @@ R_BOUND = A * np.sqrt(3) + R
 EVERY, WINDOW = 1000, 10000
 #: the settled bed after the window, one and two threads in turn in the 2-thread process
 AB_STEPS, AB_REPEATS = 2000, 3
+#: --quick: the settled window and the steps of each thread count in turn
+QUICK_WINDOW, QUICK_AB_STEPS = 5000, 1000
 SEEDS = (32452843, 86028121, 15485867)
 #: volume fraction of the bounding spheres in the insertion region (what insert/pack reaches)
 INSERT_FRACTION = 0.4
 
 
-def geometry(n: int, side: float) -> dict:
+def geometry(n: int, side: float, window: int = WINDOW, ab_steps: int = AB_STEPS) -> dict:
     """Box side, insertion region and step counts for n bodies on a side x side floor."""
     m = R_BOUND + 2e-4
     height = n * 4 / 3 * np.pi * (R_BOUND + 2e-4) ** 3 / INSERT_FRACTION / (side - 2 * m) ** 2
@@ -82,7 +84,7 @@ def geometry(n: int, side: float) -> dict:
     fall = np.sqrt(2 * region[5] / 9.81)
     settle = int(round((fall + 0.1) / DT / EVERY)) * EVERY
     return {"side": side, "top": region[5] + 3 * R_BOUND, "region": region,
-            "settle_steps": settle, "window_steps": WINDOW}
+            "settle_steps": settle, "window_steps": window, "ab_steps": ab_steps}
 
 
 #: the header and box lines shared with meshgran.py (shared_scenes), on this scene's box
@@ -284,15 +286,16 @@ def worker(start_file: str, geo_json: str, out_file: str) -> None:
         # one and two threads in turn on the same settled bed in this process (after the
         # window): the thread gain free of the differences between two processes' beds
         # and of a load change between them
-        ab = {"steps_each": AB_STEPS, "us_per_step": {"1": [], str(threads): []},
+        ab_steps = geo.get("ab_steps", AB_STEPS)
+        ab = {"steps_each": ab_steps, "us_per_step": {"1": [], str(threads): []},
               "rebuilds": {"1": [], str(threads): []}}
         for _ in range(AB_REPEATS):
             for th in (1, threads):
                 sim.threads = th
                 r0 = sim.rebuild_count
                 c0 = time.perf_counter()
-                sim.run(steps=AB_STEPS, progress=False)
-                ab["us_per_step"][str(th)].append((time.perf_counter() - c0) / AB_STEPS * 1e6)
+                sim.run(steps=ab_steps, progress=False)
+                ab["us_per_step"][str(th)].append((time.perf_counter() - c0) / ab_steps * 1e6)
                 ab["rebuilds"][str(th)].append(sim.rebuild_count - r0)
         ab["ratio_of_medians"] = (float(np.median(ab["us_per_step"]["1"]))
                                   / float(np.median(ab["us_per_step"][str(threads)])))
@@ -378,7 +381,7 @@ def plot(result: dict, path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> dict:
-    p = harness.parser(__doc__, "300 clusters")
+    p = harness.parser(__doc__, "300 clusters, one LIGGGHTS seed (one same-start pair)")
     p.add_argument("--bodies", type=int, default=None)
     p.add_argument("--no-liggghts", action="store_true")
     p.add_argument("--worker", nargs=3, help=argparse.SUPPRESS)
@@ -387,12 +390,14 @@ def main(argv: list[str] | None = None) -> dict:
         worker(*a.worker)
         return {}
     n = a.bodies or (300 if a.quick else 2000)
-    geo = geometry(n, side=0.02 if n <= 500 else 0.035)
+    seeds = SEEDS[:1] if a.quick else SEEDS
+    geo = geometry(n, side=0.02 if n <= 500 else 0.035,
+                   **({"window": QUICK_WINDOW, "ab_steps": QUICK_AB_STEPS} if a.quick else {}))
     runs, dpm_runs, d2 = [], [], None
     with tempfile.TemporaryDirectory() as tmp:
         # in turn (LIGGGHTS seed k, then dpm from its start), so that a change of load on
         # a shared machine falls on both codes alike
-        for k, seed in enumerate((None,) if a.no_liggghts else SEEDS):
+        for k, seed in enumerate((None,) if a.no_liggghts else seeds):
             r = None if seed is None else run_liggghts(n, geo, seed,
                                                        Path(tmp) / f"start_{seed}.npy")
             if r is not None:
@@ -468,13 +473,14 @@ def main(argv: list[str] | None = None) -> dict:
               "dt": DT, "template": {"centres_m": TEMPLATE.tolist(), "radius_m": R},
               "material": {"density": DENSITY, "young": YOUNG, "poisson": POISSON,
                            "restitution": RESTITUTION, "friction": FRICTION},
-              "geometry": geo, "seeds": list(SEEDS) if runs else None,
+              "geometry": geo, "seeds": list(seeds) if runs else None,
               "timing_note": "2-core machine (load average in run.load_average); dpm "
                              "threads given (DPM_THREADS in subprocesses, sim.threads set) after a "
                              "warm-up that compiles; LIGGGHTS one core; ru_maxrss includes "
                              "each process's base (Python + numba for dpm)",
               "physics": physics, "speed_ratios": speed, "memory": mem,
-              "dpm": dpm_runs, "dpm_2_threads": d2, "liggghts": runs or None}
+              "peer": harness.peer(a.no_liggghts), "dpm": dpm_runs, "dpm_2_threads": d2,
+              "liggghts": runs or None}
     path = harness.write("clusters_settle", result, a.quick,
                          tag=f"clusters_settle_{n}" if a.bodies else None)
     harness.png(plot, result, path=path.with_suffix(".png"))

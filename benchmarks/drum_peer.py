@@ -42,7 +42,10 @@ results are the same bit for bit for any thread count): both counts timed on the
 steps under the same load; everything else on 1 thread. LIGGGHTS on one core ("Loop
 time" of each ``run``). Peak resident memory (ru_maxrss) of each process.
 
-    python benchmarks/drum_peer.py [--quick] [--no-liggghts]
+    python benchmarks/drum_peer.py [--quick] [--starts N] [--no-liggghts]
+
+``--quick`` runs the 12 mm drum from start 1 only (``--starts 2``: from both, as the
+reference of tests/physics/test_drum_peer.py was recorded).
 
 Writes benchmarks/results/drum_peer[_quick].json and .png.
 """
@@ -64,7 +67,6 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 TEMPLATE = HERE / "scenes" / "drum" / "drum.liggghts"
 
 R_DRUM, R_BEAD, DENSITY = 0.02, 1e-3, 2500.0
@@ -524,12 +526,15 @@ def main(argv: list[str] | None = None) -> dict:
 
     p = harness.parser(__doc__, "12 mm deep drum, 1.2 s")
     p.add_argument("--no-liggghts", action="store_true")
+    p.add_argument("--starts", type=int, default=None, choices=range(1, len(STARTS) + 1),
+                   help=f"run from the first N starts (default {len(STARTS)}; --quick 1)")
     p.add_argument("--worker", nargs=5, help=argparse.SUPPRESS)
     a = p.parse_args(argv)
     if a.worker:
         worker(*a.worker)
         return {}
     cfg = config("quick" if a.quick else "full")
+    starts = STARTS[:a.starts or (1 if a.quick else len(STARTS))]
     two = (os.cpu_count() or 1) >= 2
     runs = {"liggghts": [], "mesh": [], "tube": []}
     loads = [os.getloadavg()[0]]
@@ -538,7 +543,7 @@ def main(argv: list[str] | None = None) -> dict:
         tris = drum_triangles(cfg["length"])
         write_stl(t / "drum.stl", tris)
         prep = {}
-        for k, seed in enumerate(STARTS):
+        for k, seed in enumerate(starts):
             st = start(cfg["length"], seed)
             sf = t / f"start_{seed}.npz"
             np.savez(sf, position=st["position"], velocity=st["velocity"], seed=seed)
@@ -577,12 +582,13 @@ def main(argv: list[str] | None = None) -> dict:
                            "restitution": {"bead-bead": E_PP, "bead-wall": E_PW},
                            "friction": {"bead-bead": MU_PP, "bead-wall": MU_PW},
                            "rolling_friction": 0.0},
-              "surface_fit": SURFACE, "starts": list(STARTS),
+              "surface_fit": SURFACE, "starts": list(starts),
               "load_average": [min(loads), max(loads)],
               "timing_note": ("load_average: 1-minute figures sampled between runs (on 2 "
                               "cores, above ~1.2 another process shared the machine and the "
                               "timings are noisy; the 2-thread intervals themselves lift "
                               "it); dpm after a warm-up that compiles; LIGGGHTS one core"),
+              "peer": harness.peer(a.no_liggghts),
               "physics": physics, "speed": speed, "memory_max_rss": mem,
               "dpm_compile_or_load": prep, "runs": runs}
     path = harness.write("drum_peer", result, a.quick)

@@ -5,6 +5,10 @@ On a machine with an NVIDIA GPU (``pip install 'dpm-granular[cuda]'``)::
     python benchmarks/gpu.py                 # writes benchmarks/results/gpu.json
     python benchmarks/gpu.py --quick         # 1e4 only, no mill: results/gpu_quick.json
 
+``--quick`` on a machine without a GPU runs ``--sim`` instead and writes gpu_quick.json
+with ``"gpu_figures": false`` and the reason (no GPU figures in it: a check that the
+script and the CUDA backend still run); if even that cannot run, the JSON says why.
+
 - box_settle (``examples/box_settle.py``) at 1e4, 1e5 and 1e6 spheres: particle-steps/s
   of ``device="cuda"`` and of the CPU path (every core) in the same run, the same number
   of steps, and the mean heights (the GPU's within 0.5 % of the CPU's is the criterion;
@@ -34,7 +38,6 @@ import harness
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-RESULTS = HERE / "results"
 
 #: (lattice, timed steps) per size; 1e4 is the reference scene (20,000 steps)
 SIZES = {"1e4": ((20, 20, 25), 20000), "1e5": ((50, 50, 40), 2000),
@@ -43,6 +46,23 @@ SIM_SIZES = {"27": ((3, 3, 3), 12)}
 #: --quick: 1e4 spheres for 2,000 steps, no ball mill
 QUICK_SIZES = {"1e4": ((20, 20, 25), 2000)}
 WARMUP = 20
+
+
+def _no_gpu() -> str | None:
+    """Why there is no usable GPU here (probed in a subprocess: numba reads
+    ``NUMBA_ENABLE_CUDASIM`` once, at its first ``import numba.cuda``), or None."""
+    import subprocess
+
+    probe = ("from numba import cuda\n"
+             "print('GPU' if cuda.is_available() else 'no CUDA GPU or driver "
+             "(numba.cuda.is_available() is False)')")
+    try:
+        out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                             timeout=120)
+    except (OSError, subprocess.SubprocessError) as exc:
+        return f"the GPU probe failed: {exc}"
+    lines = (out.stdout.strip() or out.stderr.strip() or "no output").splitlines()
+    return None if lines[-1] == "GPU" else lines[-1]
 
 
 def _backend(device: str):
@@ -149,6 +169,26 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--budget", type=float, default=480.0, help="seconds; later parts skip")
     p.add_argument("--out", default=None, help="JSON path (default results/gpu.json)")
     a = p.parse_args(argv)
+    why = None  # (--quick without a GPU: why these are no GPU figures)
+    if a.quick and not a.sim and os.environ.get("NUMBA_ENABLE_CUDASIM") != "1":
+        why = _no_gpu()
+        a.sim = why is not None
+    if a.quick and (a.sim or os.environ.get("NUMBA_ENABLE_CUDASIM") == "1"):
+        why = why or "NUMBA_ENABLE_CUDASIM=1 or --sim"
+        try:
+            res = _run(a)
+        except Exception as exc:  # noqa: BLE001 (--quick: the JSON says why, no crash)
+            res = {"issue": 19, "simulator_error": f"{type(exc).__name__}: {exc}"}
+        res.update(gpu_figures=False, why=f"no GPU figures: {why}; "
+                   + ("the CUDA simulator ran tiny sizes instead, whose timings mean nothing"
+                      if "simulator_error" not in res else "the CUDA simulator failed too"))
+        path = harness.write("gpu", res, a.quick, default=str)
+        print(f"wrote {path} (no GPU figures: {why})")
+        return res
+    return _run(a)
+
+
+def _run(a) -> dict:
     if a.sim:
         os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
         if "numba.cuda" in sys.modules:
@@ -196,9 +236,10 @@ def main(argv: list[str] | None = None) -> dict:
                       and not math.isfinite(x) else str(x))
     print(text)
     if sim_mode:
-        if a.out and Path(a.out).resolve() == (RESULTS / "gpu.json").resolve():
+        if a.out and Path(a.out).resolve() == (harness.SHIPPED / "gpu.json").resolve():
             raise SystemExit("refused: the simulator's figures are not GPU figures")
-        print("(the CUDA simulator: no GPU figures written)")
+        if not a.quick:
+            print("(the CUDA simulator: no GPU figures written)")
         if a.out:
             Path(a.out).write_text(text)
         return res

@@ -4,9 +4,14 @@ Every benchmark in this folder answers one question, takes ``--quick`` (a short 
 same measurement, minutes rather than an hour) and writes ``results/NAME.json`` (or
 ``NAME_quick.json``; a PNG beside it where the benchmark draws one). What they share:
 
-- :func:`parser`: an argument parser with ``--quick``;
+- :func:`parser`: an argument parser with ``--quick`` and ``--results DIR`` (where this
+  run's files go, default ``benchmarks/results``: a run elsewhere leaves the shipped
+  results alone; every file a benchmark writes goes under :data:`RESULTS`, read at call
+  time as ``harness.RESULTS``);
 - :func:`repeat`: warm-up calls, then repeats; median, min and max;
 - :func:`ratio`: a figure against the peer's (LIGGGHTS) measured in the same run;
+  :func:`peer`: what the JSON says of that peer (run, skipped, or missing: then dpm's
+  figures only, never a failed run);
 - :func:`machine`: the facts a figure depends on besides dpm's code;
 - :func:`write`: the JSON, with those facts under ``"run"``; :func:`png`: the plot, when
   matplotlib is installed (``pip install -e '.[bench]'``);
@@ -34,16 +39,34 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-RESULTS = HERE / "results"
+SHIPPED = HERE / "results"
+#: where this run writes (``--results DIR``; the shipped ``benchmarks/results`` by default)
+RESULTS = SHIPPED
 SCENES = HERE / "scenes"
 EXAMPLES = ROOT / "examples"
 
 
+class _Results(argparse.Action):
+    """``--results DIR``: :data:`RESULTS` becomes ``DIR`` for the rest of the run."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        global RESULTS
+        RESULTS = Path(values).resolve()
+        setattr(namespace, self.dest, RESULTS)
+
+
 def parser(doc: str | None, quick_help: str = "a short run of the same measurement"
            ) -> argparse.ArgumentParser:
-    """An argument parser described by the first line of ``doc``, with ``--quick``."""
+    """An argument parser described by the first line of ``doc``, with ``--quick`` and
+    ``--results DIR`` (sets :data:`RESULTS`, where :func:`write` and :func:`png` put files;
+    back to ``benchmarks/results`` with each new parser)."""
+    global RESULTS
+    RESULTS = SHIPPED
     p = argparse.ArgumentParser(description=(doc or "").strip().split("\n")[0])
     p.add_argument("--quick", action="store_true", help=quick_help)
+    p.add_argument("--results", action=_Results, default=SHIPPED, metavar="DIR",
+                   help="write this run's JSON and PNG files to DIR (default "
+                   "benchmarks/results)")
     return p
 
 
@@ -78,6 +101,18 @@ def ratio(ours: float | None, peer: float | None) -> float | None:
 def liggghts() -> str | None:
     """The LIGGGHTS executable on PATH (``apt-get install -y liggghts``), or None."""
     return shutil.which("liggghts")
+
+
+def peer(skipped: bool = False) -> str:
+    """What a JSON says of its LIGGGHTS peer (key ``"peer"``): run in the same run,
+    skipped (``--no-liggghts``), or missing (no ``liggghts`` on PATH: dpm's figures only)."""
+    if skipped:
+        return "skipped (--no-liggghts): dpm's figures only, no ratios"
+    exe = liggghts()
+    if exe is None:
+        return ("missing: no liggghts on PATH (apt-get install -y liggghts): dpm's figures "
+                "only, no ratios")
+    return f"LIGGGHTS ({exe}), one core, in the same run"
 
 
 def _cpu_model() -> str:
@@ -124,7 +159,7 @@ def machine() -> dict:
 
 def write(name: str, result, quick: bool = False, tag: str | None = None,
           **dumps) -> Path:
-    """Write ``result`` to ``results/<stem>.json`` (:func:`stem`); a dict gains the key
+    """Write ``result`` to ``RESULTS/<stem>.json`` (:func:`stem`); a dict gains the key
     ``"run"`` (:func:`machine`, ``quick``, the command line), a list is written as
     ``{"rows": result, "run": ...}``. Returns the path."""
     run = machine() | {"quick": quick, "argv": sys.argv[1:]}
@@ -132,7 +167,7 @@ def write(name: str, result, quick: bool = False, tag: str | None = None,
         result = {**result, "run": run}
     else:
         result = {"rows": result, "run": run}
-    RESULTS.mkdir(exist_ok=True)
+    RESULTS.mkdir(parents=True, exist_ok=True)
     path = RESULTS / f"{stem(name, quick, tag)}.json"
     dumps.setdefault("indent", 1)
     path.write_text(json.dumps(result, **dumps) + "\n")
@@ -141,7 +176,8 @@ def write(name: str, result, quick: bool = False, tag: str | None = None,
 
 def png(draw: Callable[..., object], *args, path: Path | str) -> Path | None:
     """``draw(*args, path)`` with matplotlib's Agg backend; None (and a note) when
-    matplotlib is not installed."""
+    matplotlib is not installed. A relative ``path`` is taken under :data:`RESULTS`."""
+    path = RESULTS / path
     try:
         import matplotlib
     except ImportError:
@@ -149,6 +185,7 @@ def png(draw: Callable[..., object], *args, path: Path | str) -> Path | None:
               "(pip install -e '.[bench]')", file=sys.stderr)
         return None
     matplotlib.use("Agg")
+    path.parent.mkdir(parents=True, exist_ok=True)
     draw(*args, path)
     return Path(path)
 

@@ -37,7 +37,6 @@ HERE = Path(__file__).resolve().parent
 # the example's scene (loaded by path: this script has the same module name)
 hd = harness.example("hopper_discharge")
 
-RESULTS = HERE / "results"
 RADIUS, HEIGHT = 0.04, 0.1
 #: --quick: a lower bed and a shorter rate window
 QUICK_HEIGHT, QUICK_WINDOW = 0.05, 0.1
@@ -158,7 +157,8 @@ def main(argv: list[str] | None = None) -> dict:
                                                  height=height)
     result = {"orifice_m": a.orifice, "silo_radius_m": RADIUS, "bed_height_m": height,
               "d": hd.D_BEAD,
-              "window_s": a.window, "dpm": d, "liggghts": lg}
+              "window_s": a.window, "dpm": d, "peer": harness.peer(a.no_liggghts),
+              "liggghts": lg}
     if lg:
         result["rate_ratio_dpm_over_liggghts"] = d["rate_kg_s"] / lg["rate_kg_s"]
         result["speed_ratio_dpm_over_liggghts"] = harness.ratio(d["particle_steps_per_s"],

@@ -53,7 +53,6 @@ from dpm.impact.measure import collide
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 
 
 def cases() -> list[dict]:

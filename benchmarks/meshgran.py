@@ -45,7 +45,6 @@ import numpy as np
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 
 DT = 5e-5
 RADIUS, DENSITY = 0.005, 2500.0
@@ -284,7 +283,7 @@ def main(argv: list[str] | None = None) -> dict:
                              "must agree",
               "dpm": d, "dpm_2_threads": d2, "two_thread_counts_identical": same,
               "two_thread_gain": d2["particle_steps_per_s"] / d["particle_steps_per_s"],
-              "liggghts": runs or None}
+              "peer": harness.peer(a.no_liggghts), "liggghts": runs or None}
     if runs:
         result["physics"] = compare(d, runs)
         lg = float(np.mean([r["particle_steps_per_s"] for r in runs]))

@@ -104,17 +104,25 @@ def step_time(cal: dict, N: float, P: int, frame_every: float) -> dict:
 
 
 def main() -> None:
-    ap = harness.parser(__doc__, "calibrate on results/mpi_scaling_quick.json when there "
-                                 "is one; write mpi_model_quick.json")
+    ap = harness.parser(__doc__, "calibrate on mpi_scaling_quick.json when there is one "
+                                 "(this run's --results, then benchmarks/results); write "
+                                 "mpi_model_quick.json")
     ap.add_argument("--scaling", default=None, help="(results/mpi_scaling.json)")
     ap.add_argument("--frame-every", type=float, default=1000.0,
                     help="steps between output frames (each gathers the whole state)")
     ap.add_argument("--out", default=None, help="(results/mpi_model[_quick].json)")
     a = ap.parse_args()
-    if a.scaling is None:
-        quick = harness.RESULTS / "mpi_scaling_quick.json"
-        a.scaling = str(quick if a.quick and quick.exists()
-                        else harness.RESULTS / "mpi_scaling.json")
+    if a.scaling is None:  # this run's results first (--results), then the shipped ones
+        names = ["mpi_scaling_quick.json"] * a.quick + ["mpi_scaling.json"]
+        found = [d / n for n in names for d in (harness.RESULTS, harness.SHIPPED)
+                 if (d / n).exists()]
+        if not found:
+            path = harness.write("mpi_model", {"calibration": None, "prediction": None,
+                                               "why": "no mpi_scaling JSON to calibrate on "
+                                               "(run benchmarks/mpi_scaling.py)"}, a.quick)
+            print(f"no mpi_scaling JSON: wrote {path} without a model")
+            return
+        a.scaling = str(found[0])
     cal = calibrate(json.loads(Path(a.scaling).read_text()))
     grid = [(N, P) for N in (1e6, 1e7, 1e8, 1e9) for P in (2, 64, 256, 1024)]
     rows = [step_time(cal, N, P, a.frame_every) for N, P in grid]

@@ -51,7 +51,6 @@ from shared_scenes import settled_packing
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 SCENE = HERE / "scenes" / "box_settle"
 LATTICES = {10000: (20, 20, 25), 100000: (40, 40, 63), 20000: (20, 20, 50),
             1000000: (100, 100, 100)}
@@ -61,6 +60,18 @@ WARMUP = 50
 def _mpiexec() -> str:
     beside = Path(sys.executable).parent / "mpiexec"
     return str(beside) if beside.exists() else (shutil.which("mpiexec") or "mpiexec")
+
+
+def mpi_missing() -> str | None:
+    """Why dpm cannot run on several ranks here (no ``mpiexec``, no mpi4py), or None: the
+    rank runs are then left out and the JSON says so (key ``"mpi"``)."""
+    import importlib.util
+
+    if not Path(_mpiexec()).exists() and shutil.which(_mpiexec()) is None:
+        return "missing: no mpiexec on PATH (Open MPI or MPICH): no rank runs"
+    if importlib.util.find_spec("mpi4py") is None:
+        return "missing: mpi4py is not installed (pip install mpi4py): no rank runs"
+    return None
 
 
 def worker(lat: tuple[int, int, int], steps: int, out: str, threads: int,
@@ -241,7 +252,8 @@ def plot(result: dict, path: Path) -> None:
         bottom = [b + v for b, v in zip(bottom, vals, strict=True)]
     axs[1].set_xticks(range(len(sizes)), [f"{s['particles']:,}" for s in sizes])
     axs[1].set_ylabel("share of the 2-rank run's wall time (mean over ranks)")
-    eff = ", ".join(f"{s['particles']:,}: {s['efficiency_2_ranks']:.2f}" for s in sizes)
+    eff = ", ".join(f"{s['particles']:,}: {s['efficiency_2_ranks']:.2f}" for s in sizes
+                    if "efficiency_2_ranks" in s) or "no rank runs"
     axs[1].set_title(f"dpm on 2 ranks: efficiency {eff}", fontsize=9)
     axs[1].legend(fontsize=8)
     fig.tight_layout()
@@ -272,6 +284,9 @@ def main() -> None:
         return
     a.sizes = a.sizes or ([10000] if a.quick else [10000, 100000])
     a.steps = a.steps or (500 if a.quick else 2000)
+    no_mpi = mpi_missing()
+    if no_mpi:
+        print(f"MPI {no_mpi}", flush=True)
     strong, weak = [], []
     with tempfile.TemporaryDirectory() as tmpd:
         tmp = Path(tmpd)
@@ -284,7 +299,8 @@ def main() -> None:
             for k in range(a.rounds):  # (the configurations in turn, round after round)
                 got = {"dpm_1": run_dpm(lat, steps, 1, 1, tmp, packing=packing),
                        "dpm_2_threads": run_dpm(lat, steps, 1, 2, tmp, packing=packing),
-                       "dpm_2_ranks": run_dpm(lat, steps, 2, 1, tmp, packing=packing)}
+                       "dpm_2_ranks": None if no_mpi else
+                       run_dpm(lat, steps, 2, 1, tmp, packing=packing)}
                 if not a.no_liggghts:
                     got["liggghts_1"] = run_liggghts(lat, steps, 1, tmp / f"{size}_{k}",
                                                      packing)
@@ -294,12 +310,12 @@ def main() -> None:
                 row["rounds"].append({name: r["particle_steps_per_s"]
                                       for name, r in got.items() if r})
             row.update(ratios(row["rounds"]))
-            row["dpm_2_ranks_shares"] = shares(row["dpm_2_ranks"])
+            row["dpm_2_ranks_shares"] = shares(row["dpm_2_ranks"]) if row["dpm_2_ranks"] else {}
             strong.append(row)
             (tmp / "x").mkdir(exist_ok=True)
             print(json.dumps({k: v for k, v in row.items() if not isinstance(v, dict)}),
                   flush=True)
-        if 10000 in a.sizes and not a.settle:  # weak: 10,000 per rank
+        if 10000 in a.sizes and not a.settle and not no_mpi:  # weak: 10,000 per rank
             w1 = strong[a.sizes.index(10000)]["dpm_1"]
             w2 = run_dpm(LATTICES[20000], a.steps, 2, 1, tmp)
             weak = [{"ranks": 1, "particles": w1["particles"],
@@ -309,11 +325,12 @@ def main() -> None:
                      "efficiency": w2["particle_steps_per_s"]
                      / (2 * w1["particle_steps_per_s"]), "shares": shares(w2)}]
         over = None
-        if a.oversubscribe:
+        if a.oversubscribe and not no_mpi:
             lat = LATTICES[a.sizes[0]]
             over = run_dpm(lat, min(a.steps, 500), a.oversubscribe, 1, tmp, True,
                            settled_packing(lat, a.settle) if a.settle else None)
-    result = {"scene": "box_settle", "strong": strong, "weak": weak,
+    result = {"scene": "box_settle", "mpi": no_mpi or f"dpm on 2 ranks ({_mpiexec()})",
+              "peer": harness.peer(a.no_liggghts), "strong": strong, "weak": weak,
               "oversubscribed_correctness_run": over}
     path = harness.write("mpi_scaling", result, a.quick, a.tag)
     harness.png(plot, result, path=path.with_suffix(".png"))

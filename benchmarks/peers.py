@@ -15,8 +15,10 @@ mesh floors        benchmarks/boundaries.py       (speed only: 2 to 2e5 triangle
 =================  =============================  ==========================================
 
 then reads the JSONs and writes ``benchmarks/results/peers.json`` (``peers_quick.json``)
-and ``peers.png``. ``--quick`` passes ``--quick`` to each script; ``--collect`` only reads
-the JSONs already there (no runs); ``--only NAME`` runs a subset (repeatable).
+and ``peers.png``. ``--quick`` passes ``--quick`` to each script and runs only the scenes
+of ``QUICK_SCENES`` (the others' quick runs take minutes each; ``--only`` picks any);
+``--collect`` only reads the JSONs already there (no runs); ``--only NAME`` runs a subset
+(repeatable).
 
     python benchmarks/peers.py [--quick] [--collect] [--only box_settle ...]
 """
@@ -33,7 +35,6 @@ from pathlib import Path
 import harness
 
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 
 #: name -> (script, JSON stem[, the script's arguments])
 SCENES = {
@@ -46,12 +47,15 @@ SCENES = {
     "drum": ("drum_peer.py", "drum_peer"),
     "mesh_floors": ("boundaries.py", "boundaries"),
 }
+#: --quick without --only: the scenes whose quick runs take well under a minute (every
+#: script also runs its own --quick in tests/examples/test_benchmarks_quick.py)
+QUICK_SCENES = ("box_settle", "mesh_floors")
 
 
 def _json(stem: str, quick: bool) -> dict | None:
     """A scene's results (the quick file if asked and present, else the full one)."""
     for name in ((f"{stem}_quick", stem) if quick else (stem,)):
-        path = RESULTS / f"{name}.json"
+        path = harness.RESULTS / f"{name}.json"
         if path.exists():
             return json.loads(path.read_text()) | {"_file": path.name}
     return None
@@ -70,10 +74,11 @@ def summarise(name: str, d: dict) -> list[dict]:
     rows: list[dict] = []
     src = d.get("_file", "")
     if name in ("box_settle", "box_settle_1e3"):
+        dz = d.get("mean_z_rel_diff")  # (None without the peer)
         rows.append({"scene": "box_settle", "variant": "x".join(map(str, d.get("lattice", []))),
                      "ratio_1": d.get("ratio"), "ratio_2": d.get("ratio_2_threads"),
-                     "physics": f"mean height {100 * d.get('mean_z_rel_diff', 0):+.2f} %",
-                     "file": src})
+                     "physics": f"mean height {100 * dz:+.2f} %" if dz is not None
+                     else f"peer {d.get('peer', 'missing')}", "file": src})
     elif name == "clusters":
         sr = d.get("speed_ratios", {})
         phys = _find(d, "physics") or {}
@@ -138,11 +143,12 @@ def plot(rows: list[dict], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = harness.parser(__doc__, "each scene script's --quick")
+    ap = harness.parser(__doc__, "each scene script's --quick, box_settle and the mesh "
+                        "floors only unless --only")
     ap.add_argument("--collect", action="store_true", help="only read the JSONs there")
     ap.add_argument("--only", action="append", choices=list(SCENES), default=None)
     args = ap.parse_args(argv)
-    names = args.only or list(SCENES)
+    names = args.only or list(QUICK_SCENES if args.quick and not args.collect else SCENES)
     walls = {}
     if not args.collect:
         for name in names:
@@ -153,7 +159,8 @@ def main(argv: list[str] | None = None) -> int:
             extra = list(SCENES[name][2]) if len(SCENES[name]) > 2 else []
             if args.quick and extra:
                 continue  # (a size of its own: no quick form)
-            cmd = [sys.executable, str(script)] + (["--quick"] if args.quick else extra)
+            cmd = [sys.executable, str(script), "--results", str(harness.RESULTS)] + (
+                ["--quick"] if args.quick else extra)
             print(f"== {name}: {' '.join(cmd[1:])}", flush=True)
             t0 = time.perf_counter()
             subprocess.run(cmd, check=True)
@@ -171,6 +178,7 @@ def main(argv: list[str] | None = None) -> int:
                 r[k] = None
     load = os.getloadavg() if hasattr(os, "getloadavg") else None
     out = {"quick": args.quick, "collected_only": args.collect, "load_average_at_end": load,
+           "peer": None if args.collect else harness.peer(),
            "script_wall_s": walls, "rows": rows}
     path = harness.write("peers", out, args.quick)
     if rows:

@@ -8,9 +8,10 @@ Scenes (the box-settle material and walls, Hertz-Mindlin, dt = 1e-5 s):
   neighbours per sphere, the cost is the contact laws.
 
     python benchmarks/scaling.py                # 1e3 .. 1e6
-    python benchmarks/scaling.py --quick        # 1e3 .. 1e5, fewer steps
+    python benchmarks/scaling.py --quick        # 1e3 .. 1e5, fewer steps (5e6 / N)
 
-Writes benchmarks/results/scaling[_quick].json (``{"rows": [...], "run": ...}``) and .png.
+Writes benchmarks/results/scaling[_quick].json (``{"rows": [...], "peer": ..., "run": ...}``)
+and .png.
 """
 
 from __future__ import annotations
@@ -33,7 +34,6 @@ from shared_scenes import CASES, RHO, D, scene_arrays
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 
 
 def worker(k: int, case: str, threads: int, steps: int) -> dict:
@@ -144,7 +144,7 @@ def main():
     rows = []
     for k in sizes:
         n = k**3
-        steps = max(20, min(2000, int((2e7 if a.quick else 1e8) / n)))
+        steps = max(20, min(2000, int((5e6 if a.quick else 1e8) / n)))
         for case in CASES:
             for threads in (1, 2):
                 out = subprocess.run([sys.executable, __file__, "--worker", str(k), case,
@@ -157,7 +157,8 @@ def main():
                 if r:
                     rows.append(r)
                     print(json.dumps(r), flush=True)
-    path = harness.write("scaling", rows, a.quick)  # {"rows": rows, "run": ...}
+    path = harness.write("scaling", {"rows": rows, "peer": harness.peer(a.no_liggghts)},
+                         a.quick)  # {"rows": rows, "peer": ..., "run": ...}
     harness.png(plot, rows, path=path.with_suffix(".png"))
 
 

@@ -35,7 +35,6 @@ from dpm.shapes.metrics import shape_report
 os.environ.setdefault("DPM_KERNELS", "scene")  # timings of the scene's own step module
 
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 SHAPES = ("cylinder", "torus", "tetrahedron")
 MATERIAL = dict(density=2500.0, young=1e8, poisson=0.3)
 
@@ -138,8 +137,9 @@ def main() -> None:
     args = ap.parse_args()
     if args.plot_only:
         suffix = "_quick" if args.quick else ""
-        rows = json.loads((RESULTS / f"shapes_speed_vs_error{suffix}.json").read_text())["rows"]
-        plot(rows, RESULTS / f"shapes_speed_vs_error{suffix}.png")
+        path = harness.RESULTS / f"shapes_speed_vs_error{suffix}.json"
+        rows = json.loads(path.read_text())["rows"]
+        harness.png(plot, rows, path=path.with_suffix(".png"))
         return
     resolutions = (0.1, 0.3, 0.6) if args.quick else (0.05, 0.15, 0.3, 0.5, 0.7, 1.0)
     steps = 100 if args.quick else 300
